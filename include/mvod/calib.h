@@ -1,0 +1,54 @@
+/* Camera intrinsics and the calibration files that carry them. */
+#ifndef MVOD_CALIB_H
+#define MVOD_CALIB_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#define MVOD_CALIB_FORMAT "mvod-calibration/1"
+#define MVOD_MAX_DIST 14
+
+enum mvod_cam_model {
+	MVOD_CAM_PINHOLE_RADTAN = 0, /* OpenCV model: k1 k2 p1 p2 [k3 [k4 k5 k6 [s1..s4 [tx ty]]]] */
+	MVOD_CAM_FISHEYE_KB4 = 1,    /* Kannala-Brandt, OpenCV fisheye: k1 k2 k3 k4 */
+};
+
+struct mvod_camera {
+	int width, height;     /* pixels; 0 when the file does not say (KITTI calib.txt) */
+	double fx, fy, cx, cy; /* pixels */
+	enum mvod_cam_model model;
+	int n_dist;                  /* number of valid entries in dist (0 = none) */
+	double dist[MVOD_MAX_DIST];  /* OpenCV order for the model */
+};
+
+/* What a calibration file records besides the intrinsics. */
+struct mvod_calib_meta {
+	double rms_px;     /* reprojection RMS in pixels; negative = unknown */
+	char board[128];   /* board spec, or "" */
+	char source[256];  /* what it was made from */
+};
+
+/* "pinhole-radtan" / "fisheye-kb4" and back. */
+const char *mvod_cam_model_name(enum mvod_cam_model model);
+int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out);
+
+/* True when any distortion coefficient is non-zero. */
+bool mvod_camera_has_distortion(const struct mvod_camera *cam);
+
+/*
+ * Loads a calibration file, choosing the reader by content: mvod JSON (mvod-calibration/1) or
+ * KITTI calib.txt (P0). On failure returns -errno and writes a one-line reason to err.
+ */
+int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen);
+/* KITTI odometry calib.txt: intrinsics from P0, no distortion, image size unknown (0). */
+int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen);
+/* mvod JSON from a NUL-terminated buffer (the file reader and the tests share it). */
+int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, size_t errlen);
+
+/*
+ * Writes mvod JSON to path through a temporary file in the same directory and rename(), so an
+ * existing file is replaced whole or not at all. meta may be NULL.
+ */
+int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struct mvod_calib_meta *meta);
+
+#endif

@@ -1,0 +1,38 @@
+/* Rigid-body helpers. Matrices are 3x3 row-major double[9]. */
+#ifndef MVOD_GEOM_H
+#define MVOD_GEOM_H
+
+/*
+ * A camera-to-world pose: X_world = R * X_cam + t. The world frame is the first camera's
+ * frame, OpenCV convention (x right, y down, z forward).
+ */
+struct mvod_pose {
+	double R[9];
+	double t[3];
+};
+
+void mvod_pose_identity(struct mvod_pose *p);
+/* out = a * b (apply b first); out may alias a or b. */
+void mvod_pose_compose(const struct mvod_pose *a, const struct mvod_pose *b, struct mvod_pose *out);
+/* out = a^-1; out may alias a. */
+void mvod_pose_inverse(const struct mvod_pose *a, struct mvod_pose *out);
+
+void mvod_mat3_mul(const double A[9], const double B[9], double C[9]);    /* C = A B   */
+void mvod_mat3_mul_bt(const double A[9], const double B[9], double C[9]); /* C = A B^T */
+void mvod_mat3_mul_at(const double A[9], const double B[9], double C[9]); /* C = A^T B */
+void mvod_mat3_vec(const double A[9], const double v[3], double out[3]);
+void mvod_mat3_tvec(const double A[9], const double v[3], double out[3]); /* A^T v */
+double mvod_vec3_norm(const double v[3]);
+
+/* Unit quaternion q = (w, x, y, z) with w >= 0, from a rotation matrix (Shepperd's method). */
+void mvod_rot_to_quat(const double R[9], double q[4]);
+/* Rotation matrix from a quaternion (w, x, y, z); q need not be normalised. */
+void mvod_quat_to_rot(const double q[4], double R[9]);
+/* Rotation angle of R in radians, in [0, pi]. */
+double mvod_rot_angle(const double R[9]);
+/* R = exp([w]x), axis-angle vector w in radians (Rodrigues). */
+void mvod_rot_exp(const double w[3], double R[9]);
+/* Angle between two vectors in radians; 0 when either is zero. */
+double mvod_vec3_angle(const double a[3], const double b[3]);
+
+#endif

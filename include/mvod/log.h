@@ -1,0 +1,21 @@
+/* Logging: stderr in the foreground (the journal under systemd comes with the daemon issue). */
+#ifndef MVOD_LOG_H
+#define MVOD_LOG_H
+
+enum mvod_log_level {
+	MVOD_LOG_ERROR = 0,
+	MVOD_LOG_WARN = 1,
+	MVOD_LOG_INFO = 2,
+	MVOD_LOG_DEBUG = 3,
+};
+
+void mvod_log_set_level(enum mvod_log_level level);
+enum mvod_log_level mvod_log_get_level(void);
+/* Parses "error", "warn", "info", "debug"; returns -EINVAL otherwise. */
+int mvod_log_parse_level(const char *name, enum mvod_log_level *out);
+void mvod_log(enum mvod_log_level level, const char *fmt, ...)
+	__attribute__((format(printf, 2, 3)));
+
+#define LOG(level, ...) mvod_log(MVOD_LOG_##level, __VA_ARGS__)
+
+#endif

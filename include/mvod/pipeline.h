@@ -1,0 +1,44 @@
+/* The run loop: source -> vo -> sinks, shared by the daemon and the in-process tests. */
+#ifndef MVOD_PIPELINE_H
+#define MVOD_PIPELINE_H
+
+#include <signal.h>
+#include <stdint.h>
+
+#include "mvod/ipc.h"
+#include "mvod/traj.h"
+#include "mvod/vo.h"
+
+struct mvod_run_opts {
+	const char *source;     /* URI */
+	const char *calib;      /* file, or NULL when the source carries intrinsics */
+	const char *gt;         /* ground-truth trajectory, or NULL */
+	const char *trajectory; /* output, or NULL */
+	enum mvod_traj_format traj_format;
+	const char *plot;       /* PNG, or NULL */
+	int64_t max_frames;     /* 0 = all */
+	struct mvod_vo_params vo;
+};
+void mvod_run_opts_default(struct mvod_run_opts *o);
+
+/* Summary of a finished run (printed by the daemon, asserted by tests). */
+struct mvod_run_summary {
+	int64_t frames, tracked, held;
+	double wall_s, fps;
+	double stage_ms_mean[MVOD_STAGE_COUNT];
+	double stage_ms_max[MVOD_STAGE_COUNT];
+	/* with ground truth */
+	int have_gt;
+	double ate_rmse_m;   /* after SE(3) (gt scale) or Sim(3) (auto scale) alignment */
+	double path_len_m;   /* ground-truth path length */
+	struct mvod_rpe rpe;
+};
+
+/*
+ * Runs to the end of the source, max_frames, or until *stop becomes non-zero. ipc may be NULL
+ * (no publishing). Returns 0 or -errno; setup errors are logged with what to do about them.
+ */
+int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile sig_atomic_t *stop,
+	     struct mvod_run_summary *summary);
+
+#endif

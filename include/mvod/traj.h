@@ -1,0 +1,54 @@
+/* Trajectories: crash-safe writers, readers for ground truth, and a bounded path for plots. */
+#ifndef MVOD_TRAJ_H
+#define MVOD_TRAJ_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mvod/geom.h"
+
+enum mvod_traj_format {
+	MVOD_TRAJ_TUM = 0,   /* "t tx ty tz qx qy qz qw" */
+	MVOD_TRAJ_KITTI = 1, /* row-major 3x4 [R|t], one pose per line */
+};
+
+int mvod_traj_format_parse(const char *name, enum mvod_traj_format *out);
+const char *mvod_traj_format_name(enum mvod_traj_format fmt);
+
+/*
+ * Writer: each pose is formatted into one buffer and written with a single write(2), so a
+ * killed process leaves only complete lines. The file is created (truncated) at open.
+ */
+struct mvod_traj_writer;
+int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mvod_traj_writer **out);
+/* t in seconds (ignored by KITTI). */
+int mvod_traj_writer_add(struct mvod_traj_writer *w, double t, const struct mvod_pose *pose);
+/* fsyncs and closes; returns the first error seen by any add or the close. NULL is a no-op. */
+int mvod_traj_writer_close(struct mvod_traj_writer *w);
+
+/* A whole trajectory in memory (ground truth, test output). */
+struct mvod_traj {
+	int n;
+	double *t;              /* seconds; for KITTI files the line index times 0 (unknown) */
+	struct mvod_pose *pose; /* camera-to-world */
+	enum mvod_traj_format format;
+};
+
+/* Reads TUM or KITTI, told apart by the column count (8 or 12). -errno with a reason in err. */
+int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen);
+void mvod_traj_free(struct mvod_traj *traj);
+
+/*
+ * A fixed-capacity record of positions for plotting a run of any length: when full, every
+ * second point is dropped and the keep-stride doubles, so memory never grows.
+ */
+struct mvod_path {
+	int n, cap;
+	int64_t stride, seen;
+	double *xyz; /* n * 3 */
+};
+int mvod_path_init(struct mvod_path *p, int cap);
+void mvod_path_add(struct mvod_path *p, const double xyz[3]);
+void mvod_path_fini(struct mvod_path *p);
+
+#endif

@@ -1,0 +1,111 @@
+/*
+ * Visual odometry: preprocess (resize, blur, undistort, grey), frontend (ORB + Hamming
+ * matching with Lowe's ratio test and optional cross-check), motion (essential matrix by
+ * RANSAC, cheirality among the four decompositions, relative scale), and the pose chain.
+ */
+#ifndef MVOD_VO_H
+#define MVOD_VO_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "mvod/calib.h"
+#include "mvod/geom.h"
+#include "mvod/image.h"
+
+/* Tracking states; values are those of mvod.pose_t / mvod.status_t. */
+enum mvod_track_state {
+	MVOD_STATE_STARTING = 0,
+	MVOD_STATE_INITIALIZING = 1, /* no motion estimated yet */
+	MVOD_STATE_TRACKING = 2,
+	MVOD_STATE_LOST = 3,         /* the last frame could not be tracked; pose held */
+	MVOD_STATE_SOURCE_DOWN = 4,
+	MVOD_STATE_STOPPING = 5,
+};
+
+/* Where the length of a translation step came from. */
+enum mvod_scale_source {
+	MVOD_SCALE_NONE = 0,           /* no translation this frame */
+	MVOD_SCALE_STRUCTURE = 1,      /* ratio of triangulated structure between consecutive pairs */
+	MVOD_SCALE_CONSTANT_SPEED = 2, /* structure failed: the previous speed was kept */
+	MVOD_SCALE_GROUND_TRUTH = 3,   /* --scale gt */
+	MVOD_SCALE_UNIT = 4,           /* first step of a free-scale run: length 1 defines the unit */
+};
+
+enum mvod_scale_mode {
+	MVOD_SCALE_MODE_AUTO = 0,
+	MVOD_SCALE_MODE_GT = 1,
+};
+
+/* What happened to a frame (the "mark" on a frame whose pose was held). */
+enum mvod_frame_status {
+	MVOD_FRAME_MOTION = 0,       /* full motion estimated; the frame became the reference */
+	MVOD_FRAME_FIRST = 1,        /* first frame / new reference after a loss */
+	MVOD_FRAME_ROTATION = 2,     /* too little parallax for translation: rotation only */
+	MVOD_FRAME_FEW_FEATURES = 3, /* black, textureless or blurred frame */
+	MVOD_FRAME_FEW_MATCHES = 4,
+	MVOD_FRAME_RANSAC_FAILED = 5,
+	MVOD_FRAME_FEW_INLIERS = 6,
+};
+const char *mvod_frame_status_name(enum mvod_frame_status s);
+const char *mvod_track_state_name(enum mvod_track_state s);
+const char *mvod_scale_source_name(enum mvod_scale_source s);
+
+enum mvod_stage {
+	MVOD_STAGE_CAPTURE = 0,
+	MVOD_STAGE_PREPROCESS,
+	MVOD_STAGE_DETECT,
+	MVOD_STAGE_MATCH,
+	MVOD_STAGE_POSE,
+	MVOD_STAGE_COUNT,
+};
+extern const char *const mvod_stage_names[MVOD_STAGE_COUNT];
+
+struct mvod_vo_params {
+	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
+	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
+	int max_features;       /* ORB feature cap. 2000 */
+	double ratio;           /* Lowe's ratio test threshold; >= 1 turns it off. 0.8 */
+	bool cross_check;       /* keep only mutual best matches. true */
+	double ransac_px;       /* E-RANSAC inlier threshold, pixels. 1.0 */
+	double ransac_conf;     /* E-RANSAC confidence. 0.999 */
+	int min_matches;        /* fewer matches than this: frame not tracked. 30 */
+	int min_inliers;        /* fewer E inliers in front of both cameras: not tracked. 20 */
+	double min_parallax_px; /* median rotation-compensated flow below this: rotation only. 1.0 */
+	enum mvod_scale_mode scale_mode;
+};
+void mvod_vo_params_default(struct mvod_vo_params *p);
+
+struct mvod_vo_result {
+	struct mvod_pose pose; /* camera-to-world of this frame */
+	enum mvod_track_state state;
+	enum mvod_frame_status status;
+	enum mvod_scale_source scale_source;
+	double step_m;   /* length of the translation applied (scale units), 0 if none */
+	int features;    /* keypoints detected */
+	int matches;     /* matches after ratio test / cross-check */
+	int inliers;     /* E-RANSAC inliers in front of both cameras */
+	double ms[MVOD_STAGE_COUNT]; /* stage times for this frame (capture is the caller's) */
+};
+
+struct mvod_vo;
+
+/*
+ * cam: intrinsics at the source's resolution (width x height); the VO undistorts and scales
+ * internally. All buffers are allocated here: mvod_vo_process does not allocate.
+ */
+int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,
+		   struct mvod_vo **out);
+void mvod_vo_destroy(struct mvod_vo *vo);
+/* The pinhole camera the frontend sees (after undistortion and resize). */
+void mvod_vo_camera(const struct mvod_vo *vo, struct mvod_camera *cam);
+
+/*
+ * Processes one frame. gt_position: this frame's ground-truth camera position in metres,
+ * required when scale_mode is GT (NULL otherwise). Degenerate frames hold the pose and return 0
+ * with res->status saying why; a negative errno means a real failure (bad image format).
+ */
+int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
+		    struct mvod_vo_result *res);
+
+#endif

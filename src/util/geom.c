@@ -1,0 +1,178 @@
+#include "mvod/geom.h"
+
+#include <math.h>
+#include <string.h>
+
+void mvod_pose_identity(struct mvod_pose *p)
+{
+	static const double I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+	memcpy(p->R, I, sizeof(I));
+	p->t[0] = p->t[1] = p->t[2] = 0.0;
+}
+
+void mvod_mat3_mul(const double A[9], const double B[9], double C[9])
+{
+	double tmp[9];
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			tmp[3 * i + j] = A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j];
+	memcpy(C, tmp, sizeof(tmp));
+}
+
+void mvod_mat3_mul_bt(const double A[9], const double B[9], double C[9])
+{
+	double tmp[9];
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			tmp[3 * i + j] = A[3 * i] * B[3 * j] + A[3 * i + 1] * B[3 * j + 1] +
+					 A[3 * i + 2] * B[3 * j + 2];
+	memcpy(C, tmp, sizeof(tmp));
+}
+
+void mvod_mat3_mul_at(const double A[9], const double B[9], double C[9])
+{
+	double tmp[9];
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			tmp[3 * i + j] = A[i] * B[j] + A[3 + i] * B[3 + j] + A[6 + i] * B[6 + j];
+	memcpy(C, tmp, sizeof(tmp));
+}
+
+void mvod_mat3_vec(const double A[9], const double v[3], double out[3])
+{
+	double tmp[3];
+	for (int i = 0; i < 3; i++)
+		tmp[i] = A[3 * i] * v[0] + A[3 * i + 1] * v[1] + A[3 * i + 2] * v[2];
+	memcpy(out, tmp, sizeof(tmp));
+}
+
+void mvod_mat3_tvec(const double A[9], const double v[3], double out[3])
+{
+	double tmp[3];
+	for (int i = 0; i < 3; i++)
+		tmp[i] = A[i] * v[0] + A[3 + i] * v[1] + A[6 + i] * v[2];
+	memcpy(out, tmp, sizeof(tmp));
+}
+
+double mvod_vec3_norm(const double v[3])
+{
+	return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+void mvod_pose_compose(const struct mvod_pose *a, const struct mvod_pose *b, struct mvod_pose *out)
+{
+	struct mvod_pose r;
+	mvod_mat3_mul(a->R, b->R, r.R);
+	mvod_mat3_vec(a->R, b->t, r.t);
+	for (int i = 0; i < 3; i++)
+		r.t[i] += a->t[i];
+	*out = r;
+}
+
+void mvod_pose_inverse(const struct mvod_pose *a, struct mvod_pose *out)
+{
+	struct mvod_pose r;
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			r.R[3 * i + j] = a->R[3 * j + i];
+	mvod_mat3_vec(r.R, a->t, r.t);
+	for (int i = 0; i < 3; i++)
+		r.t[i] = -r.t[i];
+	*out = r;
+}
+
+void mvod_rot_to_quat(const double R[9], double q[4])
+{
+	double tr = R[0] + R[4] + R[8];
+	double w, x, y, z;
+	if (tr > 0) {
+		double s = 2.0 * sqrt(tr + 1.0);
+		w = 0.25 * s;
+		x = (R[7] - R[5]) / s;
+		y = (R[2] - R[6]) / s;
+		z = (R[3] - R[1]) / s;
+	} else if (R[0] > R[4] && R[0] > R[8]) {
+		double s = 2.0 * sqrt(1.0 + R[0] - R[4] - R[8]);
+		w = (R[7] - R[5]) / s;
+		x = 0.25 * s;
+		y = (R[1] + R[3]) / s;
+		z = (R[2] + R[6]) / s;
+	} else if (R[4] > R[8]) {
+		double s = 2.0 * sqrt(1.0 + R[4] - R[0] - R[8]);
+		w = (R[2] - R[6]) / s;
+		x = (R[1] + R[3]) / s;
+		y = 0.25 * s;
+		z = (R[5] + R[7]) / s;
+	} else {
+		double s = 2.0 * sqrt(1.0 + R[8] - R[0] - R[4]);
+		w = (R[3] - R[1]) / s;
+		x = (R[2] + R[6]) / s;
+		y = (R[5] + R[7]) / s;
+		z = 0.25 * s;
+	}
+	double n = sqrt(w * w + x * x + y * y + z * z);
+	if (w < 0)
+		n = -n;
+	q[0] = w / n;
+	q[1] = x / n;
+	q[2] = y / n;
+	q[3] = z / n;
+}
+
+void mvod_quat_to_rot(const double q[4], double R[9])
+{
+	double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+	double w = q[0] / n, x = q[1] / n, y = q[2] / n, z = q[3] / n;
+	R[0] = 1 - 2 * (y * y + z * z);
+	R[1] = 2 * (x * y - z * w);
+	R[2] = 2 * (x * z + y * w);
+	R[3] = 2 * (x * y + z * w);
+	R[4] = 1 - 2 * (x * x + z * z);
+	R[5] = 2 * (y * z - x * w);
+	R[6] = 2 * (x * z - y * w);
+	R[7] = 2 * (y * z + x * w);
+	R[8] = 1 - 2 * (x * x + y * y);
+}
+
+double mvod_rot_angle(const double R[9])
+{
+	/* acos is ill-conditioned near 0; atan2 of |axis| and cos keeps small angles exact. */
+	double c = 0.5 * (R[0] + R[4] + R[8] - 1.0);
+	double ax = R[7] - R[5], ay = R[2] - R[6], az = R[3] - R[1];
+	double s = 0.5 * sqrt(ax * ax + ay * ay + az * az);
+	return atan2(s, c);
+}
+
+void mvod_rot_exp(const double w[3], double R[9])
+{
+	double th = mvod_vec3_norm(w);
+	if (th < 1e-15) {
+		struct mvod_pose p;
+		mvod_pose_identity(&p);
+		memcpy(R, p.R, sizeof(p.R));
+		return;
+	}
+	double k[3] = {w[0] / th, w[1] / th, w[2] / th};
+	double c = cos(th), s = sin(th), v = 1.0 - c;
+	R[0] = c + k[0] * k[0] * v;
+	R[1] = k[0] * k[1] * v - k[2] * s;
+	R[2] = k[0] * k[2] * v + k[1] * s;
+	R[3] = k[1] * k[0] * v + k[2] * s;
+	R[4] = c + k[1] * k[1] * v;
+	R[5] = k[1] * k[2] * v - k[0] * s;
+	R[6] = k[2] * k[0] * v - k[1] * s;
+	R[7] = k[2] * k[1] * v + k[0] * s;
+	R[8] = c + k[2] * k[2] * v;
+}
+
+double mvod_vec3_angle(const double a[3], const double b[3])
+{
+	double na = mvod_vec3_norm(a), nb = mvod_vec3_norm(b);
+	if (na == 0.0 || nb == 0.0)
+		return 0.0;
+	double cx = a[1] * b[2] - a[2] * b[1];
+	double cy = a[2] * b[0] - a[0] * b[2];
+	double cz = a[0] * b[1] - a[1] * b[0];
+	double cr = sqrt(cx * cx + cy * cy + cz * cz);
+	return atan2(cr, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+}

@@ -1,0 +1,84 @@
+/*
+ * The OpenCV door of the VO. Plain C: image views in, caller-owned fixed-capacity arrays out.
+ * Every function catches every exception and returns 0 or -errno (-EIO for an OpenCV error).
+ */
+#ifndef MVOD_CV_SHIM_H
+#define MVOD_CV_SHIM_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "mvod/calib.h"
+#include "mvod/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define MVOD_ORB_DESC_BYTES 32
+
+struct mvod_keypoint {
+	float x, y; /* pixels in the preprocessed image */
+};
+
+/* Caller-owned: kp[cap], desc[cap * MVOD_ORB_DESC_BYTES]. */
+struct mvod_features {
+	int n, cap;
+	struct mvod_keypoint *kp;
+	uint8_t *desc;
+};
+
+struct mvod_match {
+	int a, b; /* index into the first and second feature set */
+};
+
+/* Undistort (maps computed once), resize, blur, grey: the whole preprocess stage. */
+struct mvod_cv_preproc;
+/*
+ * cam: the source camera (width, height must be set). out_cam: the pinhole, distortion-free
+ * camera of the output images. blur_ksize 0 = off, else odd.
+ */
+int mvod_cv_preproc_create(const struct mvod_camera *cam, double resize, int blur_ksize,
+			   struct mvod_camera *out_cam, struct mvod_cv_preproc **out);
+/* out views an internal buffer, valid until the next call. -EINVAL on a size/format mismatch. */
+int mvod_cv_preproc_run(struct mvod_cv_preproc *p, const struct mvod_image *in,
+			struct mvod_image *out);
+void mvod_cv_preproc_destroy(struct mvod_cv_preproc *p);
+
+struct mvod_cv_orb;
+int mvod_cv_orb_create(int max_features, int width, int height, struct mvod_cv_orb **out);
+/* Detects up to out->cap keypoints with descriptors. */
+int mvod_cv_orb_detect(struct mvod_cv_orb *orb, const struct mvod_image *grey,
+		       struct mvod_features *out);
+void mvod_cv_orb_destroy(struct mvod_cv_orb *orb);
+
+/* Brute-force Hamming matcher with preallocated distance tables for cap features. */
+struct mvod_cv_matcher;
+int mvod_cv_matcher_create(int cap, struct mvod_cv_matcher **out);
+/*
+ * Matches a to b: nearest neighbour passing Lowe's ratio test (ratio >= 1 disables it) and,
+ * with cross_check, only when a's best in b has a as its best in a. Writes at most cap matches.
+ */
+int mvod_cv_match(struct mvod_cv_matcher *m, const struct mvod_features *a,
+		  const struct mvod_features *b, double ratio, bool cross_check,
+		  struct mvod_match *out, int cap, int *n_out);
+void mvod_cv_matcher_destroy(struct mvod_cv_matcher *m);
+
+/*
+ * Essential matrix by RANSAC (five-point) from pixel correspondences p1 -> p2 (n x 2 each) of
+ * a pinhole camera; x2^T E x1 = 0 in normalised coordinates. mask[n] gets 1 for inliers.
+ * -ENODATA when RANSAC finds no model.
+ */
+int mvod_cv_find_essential(const double *p1, const double *p2, int n, double fx, double fy,
+			   double cx, double cy, double thresh_px, double conf, double E[9],
+			   uint8_t *mask, int *n_inliers);
+/* The four candidates are (R1, t), (R1, -t), (R2, t), (R2, -t); |t| = 1. */
+int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3]);
+/* A = U diag(S) Vt, S descending. */
+int mvod_cv_svd3(const double A[9], double U[9], double S[3], double Vt[9]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
