@@ -1,2 +1,141 @@
-/* placeholder until the module lands */
-typedef int mvod_placeholder_t;
+#include "mvod/capture.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "capture/backends.h"
+
+const struct mvod_source_ops *const mvod_source_backends[] = {
+	&mvod_source_file_ops,
+	&mvod_source_images_ops,
+	&mvod_source_kitti_ops,
+	NULL,
+};
+
+struct mvod_source {
+	const struct mvod_source_ops *ops;
+	struct mvod_source_info info; /* taken once at open; every frame is held to its size */
+	max_align_t priv[];           /* ops->priv_size bytes of backend state */
+};
+
+int mvod_capture_fail(char *err, size_t errlen, int code, const char *fmt, ...)
+{
+	if (err && errlen) {
+		va_list ap;
+		va_start(ap, fmt);
+		vsnprintf(err, errlen, fmt, ap);
+		va_end(ap);
+	}
+	return code;
+}
+
+int mvod_capture_path(char *buf, size_t len, const char *dir, const char *name, char *err,
+		      size_t errlen)
+{
+	int n = snprintf(buf, len, "%s/%s", dir, name);
+	if (n < 0 || (size_t)n >= len)
+		return mvod_capture_fail(err, errlen, -ENAMETOOLONG, "path too long: %s/%s", dir,
+					 name);
+	return 0;
+}
+
+/* The backend whose scheme prefixes uri, with *location pointing past the colon. */
+static const struct mvod_source_ops *find_backend(const char *uri, const char **location)
+{
+	const char *colon = strchr(uri, ':');
+	if (!colon)
+		return NULL;
+	size_t len = (size_t)(colon - uri);
+	for (const struct mvod_source_ops *const *b = mvod_source_backends; *b; b++) {
+		if (strlen((*b)->scheme) == len && strncmp(uri, (*b)->scheme, len) == 0) {
+			*location = colon + 1;
+			return *b;
+		}
+	}
+	return NULL;
+}
+
+/* "file, images, kitti": the schemes for an error message. */
+static void list_schemes(char *buf, size_t len)
+{
+	size_t used = 0;
+	buf[0] = '\0';
+	for (const struct mvod_source_ops *const *b = mvod_source_backends; *b && used < len; b++)
+		used += (size_t)snprintf(buf + used, len - used, "%s%s",
+					 b == mvod_source_backends ? "" : ", ", (*b)->scheme);
+}
+
+/* Why uri names no backend, with the URI the user most likely meant. */
+static int unknown_scheme(const char *uri, char *err, size_t errlen)
+{
+	char known[128];
+	list_schemes(known, sizeof(known));
+	const char *colon = strchr(uri, ':');
+	/* A colon inside a path ("./a:b.mkv") is no scheme separator. */
+	if (colon && colon > uri && !memchr(uri, '/', (size_t)(colon - uri)))
+		return mvod_capture_fail(err, errlen, -EPROTONOSUPPORT,
+					 "unknown source scheme \"%.*s\" in \"%s\" (known: %s)",
+					 (int)(colon - uri), uri, uri, known);
+	struct stat st;
+	if (stat(uri, &st) == 0 && S_ISDIR(st.st_mode))
+		return mvod_capture_fail(err, errlen, -EPROTONOSUPPORT,
+					 "source \"%s\" has no scheme: write images:%s or kitti:%s "
+					 "(known: %s)", uri, uri, uri, known);
+	return mvod_capture_fail(err, errlen, -EPROTONOSUPPORT,
+				 "source \"%s\" has no scheme: for a video file write file:%s "
+				 "(known: %s)", uri, uri, known);
+}
+
+int mvod_source_open(const char *uri, struct mvod_source **out, char *err, size_t errlen)
+{
+	const char *location = NULL;
+	const struct mvod_source_ops *ops = find_backend(uri, &location);
+	if (!ops)
+		return unknown_scheme(uri, err, errlen);
+	struct mvod_source *src = calloc(1, sizeof(*src) + ops->priv_size);
+	if (!src)
+		return mvod_capture_fail(err, errlen, -ENOMEM, "out of memory opening %s", uri);
+	src->ops = ops;
+	int ret = ops->open(src->priv, location, err, errlen);
+	if (ret < 0)
+		goto fail;
+	ops->info(src->priv, &src->info);
+	*out = src;
+	return 0;
+fail:
+	free(src);
+	return ret;
+}
+
+int mvod_source_read(struct mvod_source *src, struct mvod_frame *frame)
+{
+	int ret = src->ops->read(src->priv, frame);
+	/* Everything downstream is sized from info at start-up; a frame of another size is bad. */
+	if (ret == 0 && (frame->img.w != src->info.width || frame->img.h != src->info.height))
+		return -EINVAL;
+	return ret;
+}
+
+void mvod_source_info(struct mvod_source *src, struct mvod_source_info *info)
+{
+	*info = src->info;
+}
+
+int mvod_source_camera(struct mvod_source *src, struct mvod_camera *cam)
+{
+	if (!src->ops->camera)
+		return -ENOENT;
+	return src->ops->camera(src->priv, cam);
+}
+
+void mvod_source_close(struct mvod_source *src)
+{
+	if (!src)
+		return;
+	src->ops->close(src->priv);
+	free(src);
+}

@@ -1,0 +1,21 @@
+/* What the capture backends share: their registration and the error-reporting helpers. */
+#ifndef MVOD_CAPTURE_BACKENDS_H
+#define MVOD_CAPTURE_BACKENDS_H
+
+#include <stddef.h>
+
+#include "mvod/capture.h"
+
+extern const struct mvod_source_ops mvod_source_file_ops;
+extern const struct mvod_source_ops mvod_source_images_ops;
+extern const struct mvod_source_ops mvod_source_kitti_ops;
+
+/* Writes the reason to err (when there is room) and returns code. */
+int mvod_capture_fail(char *err, size_t errlen, int code, const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+
+/* "dir/name" into buf; -ENAMETOOLONG with the reason in err when it does not fit. */
+int mvod_capture_path(char *buf, size_t len, const char *dir, const char *name, char *err,
+		      size_t errlen);
+
+#endif

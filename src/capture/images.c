@@ -1,0 +1,324 @@
+#include "capture/images.h"
+
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "mvod/log.h"
+
+/* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
+#define DEFAULT_PERIOD_US 100000
+
+static bool is_image_name(const char *name)
+{
+	static const char *const exts[] = {"png", "jpg", "jpeg", "pgm", "ppm",
+					   "bmp", "tif", "tiff"};
+	const char *dot = strrchr(name, '.');
+	/* Hidden files are editor and OS droppings (._0001.png from macOS), not frames. */
+	if (name[0] == '.' || !dot)
+		return false;
+	for (size_t i = 0; i < sizeof(exts) / sizeof(exts[0]); i++)
+		if (strcasecmp(dot + 1, exts[i]) == 0)
+			return true;
+	return false;
+}
+
+/* How many images d holds and the bytes their "dir/name" strings need. */
+static void count_images(DIR *d, size_t dirlen, size_t *n, size_t *bytes)
+{
+	*n = 0;
+	*bytes = 0;
+	for (struct dirent *e = readdir(d); e; e = readdir(d)) {
+		if (!is_image_name(e->d_name))
+			continue;
+		(*n)++;
+		*bytes += dirlen + 1 + strlen(e->d_name) + 1;
+	}
+}
+
+/* Fills up to n paths from the pool after paths[n]; returns how many fitted. */
+static size_t fill_images(DIR *d, const char *dir, char **paths, size_t n, size_t bytes)
+{
+	char *pool = (char *)(paths + n);
+	size_t k = 0;
+	for (struct dirent *e = readdir(d); e && k < n; e = readdir(d)) {
+		if (!is_image_name(e->d_name))
+			continue;
+		int len = snprintf(pool, bytes, "%s/%s", dir, e->d_name);
+		/* The directory may have grown between the two passes; what fits is the list. */
+		if (len < 0 || (size_t)len >= bytes)
+			break;
+		paths[k++] = pool;
+		pool += len + 1;
+		bytes -= (size_t)len + 1;
+	}
+	return k;
+}
+
+/* strverscmp, so that 2.png sorts before 10.png. */
+static int compare_paths(const void *a, const void *b)
+{
+	return strverscmp(*(char *const *)a, *(char *const *)b);
+}
+
+static int list_images(struct mvod_images *im, const char *dir, char *err, size_t errlen)
+{
+	DIR *d = opendir(dir);
+	if (!d)
+		return mvod_capture_fail(err, errlen, -errno, "cannot open image directory %s: %s",
+					 dir, strerror(errno));
+	int ret = 0;
+	size_t n, bytes;
+	count_images(d, strlen(dir), &n, &bytes);
+	if (n > 0) {
+		im->paths = malloc(n * sizeof(*im->paths) + bytes);
+		if (!im->paths) {
+			ret = mvod_capture_fail(err, errlen, -ENOMEM, "out of memory listing %s",
+						dir);
+			goto out;
+		}
+		rewinddir(d);
+		im->n = fill_images(d, dir, im->paths, n, bytes);
+		qsort(im->paths, im->n, sizeof(*im->paths), compare_paths);
+	}
+	if (im->n == 0)
+		ret = mvod_capture_fail(err, errlen, -ENOENT,
+					"no images in %s (looked for .png .jpg .jpeg .pgm .ppm "
+					".bmp .tif .tiff)", dir);
+out:
+	closedir(d);
+	return ret;
+}
+
+/* Seconds from the first token of line, as microseconds; -ENODATA for a blank line. */
+static int parse_seconds(const char *line, int64_t *us)
+{
+	line += strspn(line, " \t\r\n");
+	if (*line == '\0')
+		return -ENODATA;
+	char *end;
+	double s = strtod(line, &end);
+	/* 9e12 s is where int64 microseconds run out; the test also rejects nan. */
+	if (end == line || !(fabs(s) < 9e12) || (*end && !isspace((unsigned char)*end)))
+		return -EINVAL;
+	*us = llround(s * 1e6);
+	return 0;
+}
+
+/* One time per non-blank line into t[0..n), blank lines skipped. */
+static int parse_times(FILE *f, const char *path, int64_t *t, size_t n, char *err, size_t errlen)
+{
+	char *line = NULL;
+	size_t cap = 0, k = 0, lineno = 0;
+	int ret = 0;
+	while (k < n && getline(&line, &cap, f) >= 0) {
+		lineno++;
+		ret = parse_seconds(line, &t[k]);
+		if (ret == -ENODATA)
+			continue;
+		if (ret < 0) {
+			line[strcspn(line, "\r\n")] = '\0';
+			ret = mvod_capture_fail(err, errlen, -EINVAL,
+						"%s line %zu: \"%.40s\" is not a time in seconds",
+						path, lineno, line);
+			goto out;
+		}
+		k++;
+	}
+	ret = 0;
+	if (k < n)
+		ret = mvod_capture_fail(err, errlen, -EINVAL,
+					"%s has %zu timestamps for %zu images; it needs one line "
+					"per image", path, k, n);
+out:
+	free(line);
+	return ret;
+}
+
+/* The n times of path, or -ENOENT (err untouched) when the file does not exist. */
+static int load_times(struct mvod_images *im, const char *path, char *err, size_t errlen)
+{
+	FILE *f = fopen(path, "re");
+	if (!f) {
+		if (errno == ENOENT)
+			return -ENOENT;
+		return mvod_capture_fail(err, errlen, -errno, "cannot read %s: %s", path,
+					 strerror(errno));
+	}
+	int ret = 0;
+	im->times_us = malloc(im->n * sizeof(*im->times_us));
+	if (!im->times_us) {
+		ret = mvod_capture_fail(err, errlen, -ENOMEM, "out of memory reading %s", path);
+		goto out;
+	}
+	ret = parse_times(f, path, im->times_us, im->n, err, errlen);
+out:
+	fclose(f);
+	return ret;
+}
+
+/* Reads len bytes, retrying after signals; -EIO when the file is shorter. */
+static int read_all(int fd, uint8_t *buf, size_t len)
+{
+	size_t got = 0;
+	while (got < len) {
+		ssize_t r = read(fd, buf + got, len - got);
+		if (r < 0 && errno == EINTR)
+			continue;
+		if (r < 0)
+			return -errno;
+		if (r == 0)
+			return -EIO;
+		got += (size_t)r;
+	}
+	return 0;
+}
+
+/* The whole of path into im->buf. */
+static int read_file(struct mvod_images *im, const char *path, size_t *len)
+{
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
+		return -errno;
+	int ret = 0;
+	struct stat st;
+	if (fstat(fd, &st) < 0) {
+		ret = -errno;
+		goto out;
+	}
+	size_t size = (size_t)st.st_size;
+	if (size > im->cap) {
+		uint8_t *grown = realloc(im->buf, size);
+		if (!grown) {
+			ret = -ENOMEM;
+			goto out;
+		}
+		im->buf = grown;
+		im->cap = size;
+	}
+	ret = read_all(fd, im->buf, size);
+	*len = size;
+out:
+	close(fd);
+	return ret;
+}
+
+/* Image i decoded into the decoder's buffer: -errno from reading, -EINVAL when no image. */
+static int load(struct mvod_images *im, size_t i, struct mvod_image *img)
+{
+	size_t len = 0;
+	int ret = read_file(im, im->paths[i], &len);
+	if (ret < 0)
+		return ret;
+	return mvod_imgdec_decode(im->dec, im->buf, len, img);
+}
+
+/* The first image fixes the frame size and format of the whole sequence. */
+static int load_first(struct mvod_images *im, char *err, size_t errlen)
+{
+	int ret = mvod_imgdec_create(&im->dec);
+	if (ret < 0)
+		return mvod_capture_fail(err, errlen, ret, "cannot create an image decoder: %s",
+					 strerror(-ret));
+	struct mvod_image img;
+	ret = load(im, 0, &img);
+	if (ret == -EINVAL)
+		return mvod_capture_fail(err, errlen, ret, "cannot decode image %s (corrupt, or "
+					 "not an image)", im->paths[0]);
+	if (ret < 0)
+		return mvod_capture_fail(err, errlen, ret, "cannot read %s: %s", im->paths[0],
+					 strerror(-ret));
+	im->info.width = img.w;
+	im->info.height = img.h;
+	return 0;
+}
+
+/* The rate times.txt implies, 0 when it cannot tell. */
+static double times_fps(const int64_t *t, size_t n)
+{
+	if (n < 2 || t[n - 1] <= t[0])
+		return 0.0;
+	return (double)(n - 1) * 1e6 / (double)(t[n - 1] - t[0]);
+}
+
+int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_path, char *err,
+		     size_t errlen)
+{
+	int ret = list_images(im, dir, err, errlen);
+	if (ret < 0)
+		goto fail;
+	ret = load_times(im, times_path, err, errlen);
+	if (ret < 0 && ret != -ENOENT)
+		goto fail;
+	ret = load_first(im, err, errlen);
+	if (ret < 0)
+		goto fail;
+	im->info.frames = (int64_t)im->n;
+	im->info.fps = im->times_us ? times_fps(im->times_us, im->n) : 1e6 / DEFAULT_PERIOD_US;
+	if (!im->times_us)
+		LOG(WARN, "%s not found: timestamps assume 10 Hz", times_path);
+	return 0;
+fail:
+	mvod_images_close(im);
+	return ret;
+}
+
+int mvod_images_read(void *priv, struct mvod_frame *frame)
+{
+	struct mvod_images *im = priv;
+	if (im->next >= im->n)
+		return -ENODATA;
+	size_t i = im->next++;
+	/* Index and time first, so that a caller reporting a bad frame can name it. */
+	frame->index = (int64_t)i;
+	frame->utime = im->times_us ? im->times_us[i] : (int64_t)i * DEFAULT_PERIOD_US;
+	/* One unreadable file is one bad frame (-EINVAL, which callers skip), not a broken source. */
+	return load(im, i, &frame->img) < 0 ? -EINVAL : 0;
+}
+
+void mvod_images_info(void *priv, struct mvod_source_info *info)
+{
+	const struct mvod_images *im = priv;
+	*info = im->info;
+}
+
+void mvod_images_close(void *priv)
+{
+	struct mvod_images *im = priv;
+	mvod_imgdec_destroy(im->dec);
+	free(im->buf);
+	free(im->times_us);
+	free(im->paths);
+	*im = (struct mvod_images){0};
+}
+
+static int images_open(void *priv, const char *dir, char *err, size_t errlen)
+{
+	char times_path[PATH_MAX];
+	int ret = mvod_capture_path(times_path, sizeof(times_path), dir, "times.txt", err, errlen);
+	if (ret < 0)
+		return ret;
+	return mvod_images_open(priv, dir, times_path, err, errlen);
+}
+
+const struct mvod_source_ops mvod_source_images_ops = {
+	.scheme = "images",
+	.summary = "images:DIR  sorted image files (png, jpg, pgm, ppm, bmp, tiff), optional "
+		   "DIR/times.txt in seconds",
+	.priv_size = sizeof(struct mvod_images),
+	.open = images_open,
+	.read = mvod_images_read,
+	.info = mvod_images_info,
+	.camera = NULL,
+	.close = mvod_images_close,
+};

@@ -1,0 +1,161 @@
+#include "video_shim.h"
+
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <memory>
+#include <new>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+/* Every entry point runs its body through this: no exception crosses into C. */
+template <typename F> static int guarded(F &&body) noexcept
+{
+	try {
+		return body();
+	} catch (const std::bad_alloc &) {
+		return -ENOMEM;
+	} catch (const cv::Exception &) {
+		return -EIO;
+	} catch (...) {
+		return -EIO;
+	}
+}
+
+/* A view of m, valid while m keeps its buffer. */
+static int view_of(cv::Mat &m, struct mvod_image *img)
+{
+	if (m.type() != CV_8UC1 && m.type() != CV_8UC3)
+		return -ENOTSUP;
+	*img = {m.cols, m.rows, (int)m.step[0], m.channels() == 1 ? MVOD_PIX_GREY : MVOD_PIX_BGR,
+		m.data};
+	return 0;
+}
+
+struct mvod_video {
+	cv::VideoCapture cap;
+	cv::Mat frame; /* VideoCapture::read decodes into it in place while the size holds */
+};
+
+extern "C" int mvod_video_open(const char *path, struct mvod_video **out)
+{
+	return guarded([&] {
+		auto v = std::make_unique<mvod_video>();
+		if (!v->cap.open(path, cv::CAP_FFMPEG))
+			return -EINVAL;
+		*out = v.release();
+		return 0;
+	});
+}
+
+extern "C" void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info)
+{
+	*info = {0, 0, 0.0, -1};
+	(void)guarded([&] {
+		info->width = (int)v->cap.get(cv::CAP_PROP_FRAME_WIDTH);
+		info->height = (int)v->cap.get(cv::CAP_PROP_FRAME_HEIGHT);
+		double fps = v->cap.get(cv::CAP_PROP_FPS);
+		info->fps = std::isfinite(fps) && fps > 0 ? fps : 0.0;
+		/* FFmpeg reports 0 or garbage for streams that do not declare a length. */
+		double n = v->cap.get(cv::CAP_PROP_FRAME_COUNT);
+		info->frames = n >= 1 && n < 1e15 ? (int64_t)n : -1;
+		return 0;
+	});
+}
+
+extern "C" int mvod_video_read(struct mvod_video *v, struct mvod_image *img, int64_t *media_us)
+{
+	return guarded([&] {
+		if (!v->cap.read(v->frame))
+			return -ENODATA;
+		/* After a read, POS_MSEC is the presentation time of the frame just decoded. */
+		double ms = v->cap.get(cv::CAP_PROP_POS_MSEC);
+		*media_us = std::isfinite(ms) ? std::llround(ms * 1000.0) : 0;
+		return view_of(v->frame, img);
+	});
+}
+
+extern "C" void mvod_video_close(struct mvod_video *v)
+{
+	delete v;
+}
+
+/*
+ * cv::imdecode leaves its destination untouched when the data is no image, so the only sure
+ * sign of failure is a destination that was empty before and is empty after. This allocator
+ * lets the destination be emptied before every decode yet get the same pixel buffer back
+ * from Mat::create while the shape holds, so steady state does not allocate pixels.
+ */
+class KeepAllocator : public cv::MatAllocator {
+public:
+	cv::Mat kept; /* the last decoded image; shares its buffer with the destination */
+
+	cv::UMatData *allocate(int dims, const int *sizes, int type, void *data, size_t *step,
+			       cv::AccessFlag flags, cv::UMatUsageFlags usage) const override
+	{
+		if (!data && dims == 2 && !kept.empty() && sizes[0] == kept.rows &&
+		    sizes[1] == kept.cols && type == kept.type()) {
+			step[0] = kept.step[0];
+			step[1] = kept.step[1];
+			return kept.u; /* Mat::create adds the reference */
+		}
+		return std_alloc->allocate(dims, sizes, type, data, step, flags, usage);
+	}
+	bool allocate(cv::UMatData *u, cv::AccessFlag flags, cv::UMatUsageFlags usage) const override
+	{
+		return std_alloc->allocate(u, flags, usage);
+	}
+	/* Buffers always come from the standard allocator, which frees them. */
+	void deallocate(cv::UMatData *u) const override
+	{
+		std_alloc->deallocate(u);
+	}
+
+private:
+	cv::MatAllocator *std_alloc = cv::Mat::getStdAllocator();
+};
+
+struct mvod_imgdec {
+	KeepAllocator alloc; /* declared first: outlives img */
+	cv::Mat img;
+	/*
+	 * Pixels as stored (no EXIF rotation: calibration and VO want the sensor's layout); the
+	 * first image then fixes grey or colour for the rest of the sequence.
+	 */
+	int flags = cv::IMREAD_ANYCOLOR | cv::IMREAD_IGNORE_ORIENTATION;
+};
+
+extern "C" int mvod_imgdec_create(struct mvod_imgdec **out)
+{
+	return guarded([&] {
+		auto *d = new mvod_imgdec();
+		d->img.allocator = &d->alloc;
+		*out = d;
+		return 0;
+	});
+}
+
+extern "C" int mvod_imgdec_decode(struct mvod_imgdec *d, const void *buf, size_t len,
+				  struct mvod_image *img)
+{
+	if (len == 0 || len > INT_MAX)
+		return -EINVAL;
+	return guarded([&] {
+		cv::Mat raw(1, (int)len, CV_8UC1, const_cast<void *>(buf));
+		d->img.release();
+		cv::imdecode(raw, d->flags, &d->img);
+		if (d->img.empty())
+			return -EINVAL;
+		d->alloc.kept = d->img;
+		d->flags = (d->img.channels() == 1 ? cv::IMREAD_GRAYSCALE : cv::IMREAD_COLOR) |
+			   cv::IMREAD_IGNORE_ORIENTATION;
+		return view_of(d->img, img);
+	});
+}
+
+extern "C" void mvod_imgdec_destroy(struct mvod_imgdec *d)
+{
+	delete d;
+}
