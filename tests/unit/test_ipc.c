@@ -1,0 +1,366 @@
+/* LCM publishing over memq:// (in-process) and file:// logs; nothing leaves the process. */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "mvod/ipc.h"
+#include "mvod_pose_t.h"
+#include "mvod_status_t.h"
+
+#define N_POSES 10
+#define DEG (M_PI / 180.0)
+
+struct received {
+	mvod_pose_t poses[N_POSES];
+	int n_poses;
+	mvod_status_t status;
+	int n_status;
+};
+
+struct fixture {
+	lcm_t *lcm;
+	struct received got;
+};
+
+static void on_pose(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_pose_t *msg,
+		    void *user)
+{
+	struct received *got = user;
+	if (got->n_poses < N_POSES)
+		got->poses[got->n_poses] = *msg;
+	got->n_poses++;
+}
+
+static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_status_t *msg,
+		      void *user)
+{
+	struct received *got = user;
+	got->status = *msg;
+	got->n_status++;
+}
+
+static int setup(void **state)
+{
+	struct fixture *f = calloc(1, sizeof(*f));
+	if (!f)
+		return -1;
+	f->lcm = lcm_create("memq://");
+	if (!f->lcm) {
+		free(f);
+		return -1;
+	}
+	*state = f;
+	return 0;
+}
+
+static int teardown(void **state)
+{
+	struct fixture *f = *state;
+	lcm_destroy(f->lcm);
+	free(f);
+	return 0;
+}
+
+/* Rotation by angle a about y: its quaternion is (cos a/2, 0, sin a/2, 0), sign chosen so w >= 0. */
+static void rot_y(double a, double R[9], double q[4])
+{
+	const double c = cos(a), s = sin(a);
+	const double M[9] = {c, 0, s, 0, 1, 0, -s, 0, c};
+	memcpy(R, M, sizeof(M));
+	double sign = cos(a / 2) < 0 ? -1.0 : 1.0;
+	q[0] = sign * cos(a / 2);
+	q[1] = 0.0;
+	q[2] = sign * sin(a / 2);
+	q[3] = 0.0;
+}
+
+/* Frame i: 30° about y plus 40° per frame (crossing w < 0 on the way), position (1,2,3) + i x. */
+static void make_result(int i, struct mvod_vo_result *res, double q[4])
+{
+	memset(res, 0, sizeof(*res));
+	rot_y((30.0 + 40.0 * i) * DEG, res->pose.R, q);
+	res->pose.t[0] = 1.0 + i;
+	res->pose.t[1] = 2.0;
+	res->pose.t[2] = 3.0;
+	res->state = (enum mvod_track_state)(i % 6);
+	res->scale_source = (enum mvod_scale_source)(i % 5);
+	res->status = (enum mvod_frame_status)(i % 7);
+	res->features = 1000 + i;
+	res->matches = 500 + i;
+	res->inliers = 200 + i;
+}
+
+static int64_t utime_of(int i)
+{
+	return 1700000000000000LL + 33333LL * i;
+}
+
+static void assert_pose_equal(const mvod_pose_t *m, int i)
+{
+	struct mvod_vo_result res;
+	double q[4];
+	make_result(i, &res, q);
+	assert_int_equal(m->utime, utime_of(i));
+	assert_int_equal(m->frame, i);
+	for (int k = 0; k < 3; k++)
+		assert_true(m->position[k] == res.pose.t[k]);
+	assert_true(m->orientation[0] >= 0.0);
+	for (int k = 0; k < 4; k++)
+		assert_float_equal(m->orientation[k], q[k], 1e-12);
+	assert_int_equal(m->state, res.state);
+	assert_int_equal(m->scale_source, res.scale_source);
+	assert_int_equal(m->frame_status, res.status);
+	assert_int_equal(m->features, res.features);
+	assert_int_equal(m->matches, res.matches);
+	assert_int_equal(m->inliers, res.inliers);
+}
+
+static void publish_poses(struct mvod_ipc *ipc, int n)
+{
+	for (int i = 0; i < n; i++) {
+		struct mvod_vo_result res;
+		double q[4];
+		make_result(i, &res, q);
+		assert_int_equal(mvod_ipc_publish_pose(ipc, utime_of(i), i, &res), 0);
+	}
+}
+
+static void test_pose_roundtrip(void **state)
+{
+	struct fixture *f = *state;
+	struct mvod_ipc *ipc = NULL;
+	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
+	mvod_pose_t_subscription_t *sub =
+		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, on_pose, &f->got);
+	assert_non_null(sub);
+
+	publish_poses(ipc, N_POSES);
+	for (int i = 0; i < N_POSES; i++)
+		assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+
+	assert_int_equal(f->got.n_poses, N_POSES);
+	for (int i = 0; i < N_POSES; i++)
+		assert_pose_equal(&f->got.poses[i], i);
+	assert_int_equal(lcm_handle_timeout(f->lcm, 10), 0);
+
+	mvod_pose_t_unsubscribe(f->lcm, sub);
+	mvod_ipc_destroy(ipc);
+}
+
+static void test_status_roundtrip(void **state)
+{
+	struct fixture *f = *state;
+	struct mvod_ipc *ipc = NULL;
+	const struct mvod_status st = {
+		.utime = 1234567890123LL,
+		.fps = 29.5,
+		.stage_ms = {1.5, 2.25, 3.125, 4.0625, 5.5},
+		.features = 1800, .matches = 900, .inliers = 450,
+		.frames = 123456789012LL, .dropped = 42, .rss_kb = 65536,
+		.uptime_s = 3600.125,
+		.state = MVOD_STATE_LOST,
+	};
+	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
+	mvod_status_t_subscription_t *sub =
+		mvod_status_t_subscribe(f->lcm, MVOD_DEFAULT_STATUS_CHANNEL, on_status, &f->got);
+	assert_non_null(sub);
+
+	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);
+	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+
+	const mvod_status_t *m = &f->got.status;
+	assert_int_equal(f->got.n_status, 1);
+	assert_int_equal(m->utime, st.utime);
+	assert_int_equal(m->state, MVOD_POSE_T_STATE_LOST);
+	assert_true(m->fps == 29.5f);
+	assert_true(m->capture_ms == 1.5f);
+	assert_true(m->preprocess_ms == 2.25f);
+	assert_true(m->detect_ms == 3.125f);
+	assert_true(m->match_ms == 4.0625f);
+	assert_true(m->pose_ms == 5.5f);
+	assert_int_equal(m->features, 1800);
+	assert_int_equal(m->matches, 900);
+	assert_int_equal(m->inliers, 450);
+	assert_int_equal(m->frames, st.frames);
+	assert_int_equal(m->dropped_frames, 42);
+	assert_int_equal(m->rss_kb, 65536);
+	assert_true(m->uptime_s == 3600.125);
+
+	mvod_status_t_unsubscribe(f->lcm, sub);
+	mvod_ipc_destroy(ipc);
+}
+
+static void count_pose(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_pose_t *msg,
+		       void *user)
+{
+	(*(int *)user)++;
+}
+
+static void count_status(const lcm_recv_buf_t *rbuf, const char *channel,
+			 const mvod_status_t *msg, void *user)
+{
+	(*(int *)user)++;
+}
+
+static void test_custom_channels(void **state)
+{
+	struct fixture *f = *state;
+	struct mvod_ipc *ipc = NULL;
+	int def_pose = 0, def_status = 0, cam_pose = 0, cam_status = 0;
+	assert_int_equal(mvod_ipc_create_on(f->lcm, "CAM0_POSE", "CAM0_STATUS", &ipc), 0);
+	mvod_pose_t_subscription_t *pose_subs[] = {
+		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, count_pose, &def_pose),
+		mvod_pose_t_subscribe(f->lcm, "CAM0_POSE", count_pose, &cam_pose),
+	};
+	mvod_status_t_subscription_t *status_subs[] = {
+		mvod_status_t_subscribe(f->lcm, MVOD_DEFAULT_STATUS_CHANNEL, count_status,
+					&def_status),
+		mvod_status_t_subscribe(f->lcm, "CAM0_STATUS", count_status, &cam_status),
+	};
+
+	struct mvod_vo_result res;
+	double q[4];
+	const struct mvod_status st = {.state = MVOD_STATE_TRACKING};
+	make_result(0, &res, q);
+	assert_int_equal(mvod_ipc_publish_pose(ipc, utime_of(0), 0, &res), 0);
+	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);
+	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+	assert_int_equal(lcm_handle_timeout(f->lcm, 10), 0);
+
+	assert_int_equal(cam_pose, 1);
+	assert_int_equal(cam_status, 1);
+	assert_int_equal(def_pose, 0);
+	assert_int_equal(def_status, 0);
+	for (int i = 0; i < 2; i++) {
+		mvod_pose_t_unsubscribe(f->lcm, pose_subs[i]);
+		mvod_status_t_unsubscribe(f->lcm, status_subs[i]);
+	}
+	mvod_ipc_destroy(ipc);
+}
+
+static void test_bad_channels(void **state)
+{
+	struct fixture *f = *state;
+	struct mvod_ipc *ipc = NULL;
+	char longname[LCM_MAX_CHANNEL_NAME_LENGTH + 2];
+	memset(longname, 'A', sizeof(longname) - 1);
+	longname[sizeof(longname) - 1] = '\0';
+
+	assert_int_equal(mvod_ipc_create_on(f->lcm, "", NULL, &ipc), -EINVAL);
+	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, longname, &ipc), -EINVAL);
+	assert_int_equal(mvod_ipc_create_on(NULL, NULL, NULL, &ipc), -EINVAL);
+	assert_null(ipc);
+	longname[LCM_MAX_CHANNEL_NAME_LENGTH] = '\0';
+	assert_int_equal(mvod_ipc_create_on(f->lcm, longname, NULL, &ipc), 0);
+	mvod_ipc_destroy(ipc);
+	mvod_ipc_destroy(NULL);
+}
+
+static void test_bad_url(void **state)
+{
+	struct mvod_ipc *ipc = NULL;
+	int ret = mvod_ipc_create("nonsense://x", NULL, NULL, &ipc);
+	assert_true(ret < 0);
+	assert_null(ipc);
+}
+
+/* Counts the events of a log on channel; decodes the third pose when it is on it. */
+static int count_log_events(const char *path, const char *channel, mvod_pose_t *third)
+{
+	lcm_eventlog_t *log = lcm_eventlog_create(path, "r");
+	assert_non_null(log);
+	int n = 0;
+	lcm_eventlog_event_t *ev;
+	while ((ev = lcm_eventlog_read_next_event(log)) != NULL) {
+		if (strcmp(ev->channel, channel) == 0) {
+			if (n == 2 && third)
+				assert_true(mvod_pose_t_decode(ev->data, 0, ev->datalen, third) > 0);
+			n++;
+		}
+		lcm_eventlog_free_event(ev);
+	}
+	lcm_eventlog_destroy(log);
+	return n;
+}
+
+struct tmplog {
+	char dir[64], path[96], url[128];
+};
+
+static void tmplog_init(struct tmplog *t)
+{
+	strcpy(t->dir, "/tmp/mvod-test-ipc-XXXXXX");
+	assert_non_null(mkdtemp(t->dir));
+	snprintf(t->path, sizeof(t->path), "%s/poses.lcm", t->dir);
+	snprintf(t->url, sizeof(t->url), "file://%s?mode=w", t->path);
+}
+
+static void tmplog_fini(const struct tmplog *t)
+{
+	unlink(t->path);
+	rmdir(t->dir);
+}
+
+static void test_file_log(void **state)
+{
+	struct tmplog t;
+	struct mvod_ipc *ipc = NULL;
+	mvod_pose_t third;
+	tmplog_init(&t);
+
+	assert_int_equal(mvod_ipc_create(t.url, NULL, NULL, &ipc), 0);
+	publish_poses(ipc, 5);
+	mvod_ipc_destroy(ipc);
+
+	assert_int_equal(count_log_events(t.path, MVOD_DEFAULT_POSE_CHANNEL, &third), 5);
+	assert_pose_equal(&third, 2);
+	tmplog_fini(&t);
+}
+
+/* A NULL url goes to LCM_DEFAULT_URL; pointed at a log file, nothing touches the network. */
+static void test_default_url_from_env(void **state)
+{
+	struct tmplog t;
+	struct mvod_ipc *ipc = NULL;
+	const char *saved = getenv("LCM_DEFAULT_URL");
+	char *restore = saved ? strdup(saved) : NULL;
+	tmplog_init(&t);
+
+	assert_int_equal(setenv("LCM_DEFAULT_URL", t.url, 1), 0);
+	int ret = mvod_ipc_create(NULL, NULL, NULL, &ipc);
+	if (restore)
+		setenv("LCM_DEFAULT_URL", restore, 1);
+	else
+		unsetenv("LCM_DEFAULT_URL");
+	free(restore);
+	assert_int_equal(ret, 0);
+	publish_poses(ipc, 3);
+	mvod_ipc_destroy(ipc);
+
+	assert_int_equal(count_log_events(t.path, MVOD_DEFAULT_POSE_CHANNEL, NULL), 3);
+	tmplog_fini(&t);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test_setup_teardown(test_pose_roundtrip, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_status_roundtrip, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_custom_channels, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_bad_channels, setup, teardown),
+		cmocka_unit_test(test_bad_url),
+		cmocka_unit_test(test_file_log),
+		cmocka_unit_test(test_default_url_from_env),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,262 @@
+/* The top-down trajectory plot: a real PNG of the designed size, written atomically. */
+#include <dirent.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "mvod/plot.h"
+
+/* The canvas size plot_shim.cpp draws on. */
+#define PLOT_W 1000
+#define PLOT_H 800
+#define N_CIRCLE 200
+
+struct tmpdir {
+	char dir[64];
+};
+
+static int setup(void **state)
+{
+	struct tmpdir *t = malloc(sizeof(*t));
+	if (!t)
+		return -1;
+	strcpy(t->dir, "/tmp/mvod-test-plot-XXXXXX");
+	if (!mkdtemp(t->dir)) {
+		free(t);
+		return -1;
+	}
+	*state = t;
+	return 0;
+}
+
+/* Leaves the PNGs for a human to look at when MVOD_KEEP_PLOTS is set. */
+static int teardown(void **state)
+{
+	struct tmpdir *t = *state;
+	if (!getenv("MVOD_KEEP_PLOTS")) {
+		DIR *d = opendir(t->dir);
+		struct dirent *e;
+		while (d && (e = readdir(d)) != NULL) {
+			char p[sizeof(t->dir) + sizeof(e->d_name) + 1];
+			if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+				continue;
+			snprintf(p, sizeof(p), "%s/%s", t->dir, e->d_name);
+			unlink(p);
+		}
+		if (d)
+			closedir(d);
+		rmdir(t->dir);
+	}
+	free(t);
+	return 0;
+}
+
+static uint32_t be32(const unsigned char *p)
+{
+	return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+/* Signature, then IHDR first with the canvas size. */
+static void assert_png(const char *path, uint32_t w, uint32_t h)
+{
+	static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+	unsigned char head[24];
+	FILE *f = fopen(path, "rb");
+	assert_non_null(f);
+	assert_int_equal(fread(head, 1, sizeof(head), f), sizeof(head));
+	fclose(f);
+	assert_memory_equal(head, sig, sizeof(sig));
+	assert_memory_equal(head + 12, "IHDR", 4);
+	assert_int_equal(be32(head + 16), w);
+	assert_int_equal(be32(head + 20), h);
+}
+
+/* Entries other than "." and ".." whose name starts with a dot: temporaries. */
+static int count_hidden(const char *dir)
+{
+	DIR *d = opendir(dir);
+	assert_non_null(d);
+	int n = 0;
+	struct dirent *e;
+	while ((e = readdir(d)) != NULL)
+		if (e->d_name[0] == '.' && strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+			n++;
+	closedir(d);
+	return n;
+}
+
+static void join(char *out, size_t n, const char *dir, const char *name)
+{
+	snprintf(out, n, "%s/%s", dir, name);
+}
+
+static void circle(double *xyz, int n, double r)
+{
+	for (int i = 0; i < n; i++) {
+		double a = 2 * M_PI * i / (n - 1);
+		xyz[3 * i] = r * sin(a);
+		xyz[3 * i + 1] = 0.0;
+		xyz[3 * i + 2] = r - r * cos(a);
+	}
+}
+
+/* Camera-to-world rotation about y by a: forward (0,0,1) turns to (sin a, 0, cos a). */
+static void yaw(double a, double R[9])
+{
+	const double M[9] = {cos(a), 0, sin(a), 0, 1, 0, -sin(a), 0, cos(a)};
+	memcpy(R, M, sizeof(M));
+}
+
+static void test_circle_vs_gt(void **state)
+{
+	struct tmpdir *t = *state;
+	double est[3 * N_CIRCLE], gt[3 * N_CIRCLE], R[9];
+	char path[128];
+	circle(est, N_CIRCLE, 5.0);
+	circle(gt, N_CIRCLE, 5.4);
+	yaw(0.0, R);
+	join(path, sizeof(path), t->dir, "circle.png");
+
+	assert_int_equal(mvod_plot_topdown(path, "circle: estimate vs ground truth", est,
+					   N_CIRCLE, R, gt, N_CIRCLE), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+	assert_int_equal(count_hidden(t->dir), 0);
+}
+
+/* Also replaces an existing file by rename. */
+static void test_static_point(void **state)
+{
+	struct tmpdir *t = *state;
+	const double est[3] = {2.0, 0.0, -1.0};
+	char path[128];
+	join(path, sizeof(path), t->dir, "static.png");
+	FILE *f = fopen(path, "w");
+	assert_non_null(f);
+	fputs("old", f);
+	fclose(f);
+
+	assert_int_equal(mvod_plot_topdown(path, "static camera", est, 1, NULL, NULL, 0), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+	assert_int_equal(count_hidden(t->dir), 0);
+}
+
+static void test_degenerate_inputs(void **state)
+{
+	struct tmpdir *t = *state;
+	double est[3 * 5];
+	char path[128];
+	for (int i = 0; i < 5; i++) {
+		est[3 * i] = i;
+		est[3 * i + 1] = 0;
+		est[3 * i + 2] = 2.0 * i;
+	}
+	est[3 * 2] = NAN;
+	join(path, sizeof(path), t->dir, "nan.png");
+	assert_int_equal(mvod_plot_topdown(path, "with a NaN", est, 5, NULL, NULL, 0), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+
+	/* Diverged values must neither hang the tick loops nor overflow the view. */
+	const double wild[9] = {-DBL_MAX, 0, DBL_MAX, INFINITY, 0, 1e300, 1.0, 0.0, 1.0};
+	const double R_nan[9] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
+	join(path, sizeof(path), t->dir, "wild.png");
+	assert_int_equal(mvod_plot_topdown(path, "diverged", wild, 3, R_nan, wild, 3), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+
+	join(path, sizeof(path), t->dir, "empty.png");
+	assert_int_equal(mvod_plot_topdown(path, NULL, NULL, 0, NULL, NULL, 0), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+	assert_int_equal(count_hidden(t->dir), 0);
+}
+
+/* A straight drive forward and a long zig-zag (the shape a lawn-mower pattern makes). */
+static void test_line_and_zigzag(void **state)
+{
+	struct tmpdir *t = *state;
+	enum { N = 2000 };
+	static double est[3 * N], gt[3 * N];
+	double R[9];
+	char path[128];
+	for (int i = 0; i < N; i++) {
+		gt[3 * i] = 0.0;
+		gt[3 * i + 1] = 0.0;
+		gt[3 * i + 2] = 0.05 * i;
+		est[3 * i] = 0.002 * i * sin(i * 0.01);
+		est[3 * i + 1] = 0.0;
+		est[3 * i + 2] = 0.048 * i;
+	}
+	yaw(0.1, R);
+	join(path, sizeof(path), t->dir, "line.png");
+	assert_int_equal(mvod_plot_topdown(path, "straight line", est, N, R, gt, N), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+
+	for (int i = 0; i < N; i++) {
+		double leg = fmod(i / 100.0, 2.0);
+		gt[3 * i] = (leg < 1 ? leg : 2 - leg) * 30.0;
+		gt[3 * i + 2] = i * 0.1;
+		est[3 * i] = gt[3 * i] * 1.03 + 0.0004 * i;
+		est[3 * i + 2] = gt[3 * i + 2] * 0.98;
+	}
+	yaw(-2.0, R);
+	join(path, sizeof(path), t->dir, "zigzag.png");
+	assert_int_equal(mvod_plot_topdown(path, "zig-zag, 2000 poses", est, N, R, gt, N), 0);
+	assert_png(path, PLOT_W, PLOT_H);
+	assert_int_equal(count_hidden(t->dir), 0);
+}
+
+static void test_bad_args(void **state)
+{
+	struct tmpdir *t = *state;
+	const double est[3] = {0};
+	char path[128];
+	join(path, sizeof(path), t->dir, "x.png");
+	assert_int_equal(mvod_plot_topdown(path, "t", est, -1, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", NULL, 3, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, -2), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(NULL, "t", est, 1, NULL, NULL, 0), -EINVAL);
+	join(path, sizeof(path), t->dir, "noext");
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0), -EINVAL);
+	join(path, sizeof(path), t->dir, "x.nosuchformat");
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(count_hidden(t->dir), 0);
+	assert_int_equal(access(path, F_OK), -1);
+}
+
+static void test_unwritable(void **state)
+{
+	struct tmpdir *t = *state;
+	const double est[6] = {0, 0, 0, 1, 0, 1};
+	char path[128];
+	assert_true(mvod_plot_topdown("/nonexistent/dir/x.png", "t", est, 2, NULL, NULL, 0) < 0);
+	assert_int_equal(access("/nonexistent/dir/x.png", F_OK), -1);
+
+	/* A directory where the file should go: the temp is written, rename fails, temp removed. */
+	join(path, sizeof(path), t->dir, "taken.png");
+	assert_int_equal(mkdir(path, 0700), 0);
+	assert_true(mvod_plot_topdown(path, "t", est, 2, NULL, NULL, 0) < 0);
+	assert_int_equal(count_hidden(t->dir), 0);
+	rmdir(path);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test_setup_teardown(test_circle_vs_gt, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_static_point, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_degenerate_inputs, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_line_and_zigzag, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_bad_args, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_unwritable, setup, teardown),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
