@@ -1,2 +1,346 @@
-/* placeholder until the module lands */
-typedef int mvod_placeholder_t;
+#include "mvod/pipeline.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "mvod/capture.h"
+#include "mvod/eval.h"
+#include "mvod/log.h"
+#include "mvod/plot.h"
+
+/* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
+#define PATH_POINTS 20000
+
+void mvod_run_opts_default(struct mvod_run_opts *o)
+{
+	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM};
+	mvod_vo_params_default(&o->vo);
+}
+
+struct run {
+	const struct mvod_run_opts *o;
+	struct mvod_source *src;
+	struct mvod_source_info info;
+	struct mvod_camera cam;
+	struct mvod_traj gt;
+	struct mvod_vo *vo;
+	struct mvod_traj_writer *traj;
+	struct mvod_ipc *ipc;
+	struct mvod_path est_path, gt_path;
+	struct mvod_pose prev_est, prev_gt;
+	int have_prev;
+	struct mvod_run_summary *sum;
+	double stage_total[MVOD_STAGE_COUNT];
+	double t_start, last_status;
+	enum mvod_track_state state;
+	int traj_failed;
+};
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + ts.tv_nsec / 1e9;
+}
+
+static int64_t rss_kb(void)
+{
+	long pages = 0, resident = 0;
+	FILE *f = fopen("/proc/self/statm", "r");
+	if (!f)
+		return -1;
+	int ok = fscanf(f, "%ld %ld", &pages, &resident) == 2;
+	fclose(f);
+	return ok ? resident * (sysconf(_SC_PAGESIZE) / 1024) : -1;
+}
+
+static int open_camera(struct run *r)
+{
+	char err[512] = "";
+	const struct mvod_run_opts *o = r->o;
+	if (o->calib) {
+		int ret = mvod_calib_load(o->calib, &r->cam, err, sizeof(err));
+		if (ret)
+			LOG(ERROR, "calibration: %s", err);
+		if (ret)
+			return ret;
+	} else if (mvod_source_camera(r->src, &r->cam) != 0) {
+		LOG(ERROR, "%s carries no camera intrinsics: pass --calib FILE (mvod JSON or KITTI "
+			   "calib.txt)", o->source);
+		return -EINVAL;
+	}
+	if (r->cam.width == 0 && r->cam.height == 0) {
+		r->cam.width = r->info.width;
+		r->cam.height = r->info.height;
+	}
+	if (r->cam.width != r->info.width || r->cam.height != r->info.height) {
+		LOG(ERROR, "calibration is for %dx%d images but %s delivers %dx%d: use the "
+			   "calibration made for this camera mode",
+		    r->cam.width, r->cam.height, o->source, r->info.width, r->info.height);
+		return -EINVAL;
+	}
+	return 0;
+}
+
+static int open_inputs(struct run *r)
+{
+	char err[512] = "";
+	const struct mvod_run_opts *o = r->o;
+	int ret = mvod_source_open(o->source, &r->src, err, sizeof(err));
+	if (ret) {
+		LOG(ERROR, "cannot open source %s: %s", o->source, err);
+		return ret;
+	}
+	mvod_source_info(r->src, &r->info);
+	ret = open_camera(r);
+	if (ret)
+		return ret;
+	if (o->gt) {
+		ret = mvod_traj_load(o->gt, &r->gt, err, sizeof(err));
+		if (ret) {
+			LOG(ERROR, "ground truth: %s", err);
+			return ret;
+		}
+	} else if (o->vo.scale_mode == MVOD_SCALE_MODE_GT) {
+		LOG(ERROR, "--scale gt needs a ground-truth trajectory: pass --gt FILE");
+		return -EINVAL;
+	}
+	ret = mvod_vo_create(&o->vo, &r->cam, &r->vo);
+	if (ret)
+		LOG(ERROR, "cannot set up visual odometry for %dx%d: %s", r->cam.width,
+		    r->cam.height, strerror(-ret));
+	return ret;
+}
+
+/* Outputs open last, so bad input never leaves an empty or truncated output behind. */
+static int open_outputs(struct run *r)
+{
+	const struct mvod_run_opts *o = r->o;
+	if (o->trajectory) {
+		int ret = mvod_traj_writer_open(o->trajectory, o->traj_format, &r->traj);
+		if (ret) {
+			LOG(ERROR, "cannot create trajectory file %s: %s", o->trajectory,
+			    strerror(-ret));
+			return ret;
+		}
+	}
+	if (mvod_path_init(&r->est_path, PATH_POINTS) || mvod_path_init(&r->gt_path, PATH_POINTS))
+		return -ENOMEM;
+	return 0;
+}
+
+/* Ground truth for a frame: KITTI files by index, TUM files by nearest timestamp. */
+static const struct mvod_pose *gt_for(const struct run *r, const struct mvod_frame *f)
+{
+	if (!r->gt.n)
+		return NULL;
+	if (r->gt.format == MVOD_TRAJ_KITTI)
+		return f->index < r->gt.n ? &r->gt.pose[f->index] : NULL;
+	double t = f->utime / 1e6;
+	int lo = 0, hi = r->gt.n - 1;
+	while (lo < hi) {
+		int mid = (lo + hi) / 2;
+		if (r->gt.t[mid] < t)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	if (lo > 0 && fabs(r->gt.t[lo - 1] - t) < fabs(r->gt.t[lo] - t))
+		lo--;
+	/* Within 5 ms: a different clock or a missing pose is not a match. */
+	return fabs(r->gt.t[lo] - t) <= 0.005 ? &r->gt.pose[lo] : NULL;
+}
+
+static void publish_status(struct run *r, const struct mvod_frame *f,
+			   const struct mvod_vo_result *res)
+{
+	struct mvod_run_summary *s = r->sum;
+	double now = now_s();
+	struct mvod_status st = {
+		.utime = f->utime,
+		.fps = s->frames / fmax(now - r->t_start, 1e-9),
+		.features = res->features,
+		.matches = res->matches,
+		.inliers = res->inliers,
+		.frames = s->frames,
+		.dropped = 0,
+		.rss_kb = rss_kb(),
+		.uptime_s = now - r->t_start,
+		.state = res->state,
+	};
+	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
+		st.stage_ms[k] = r->stage_total[k] / (double)s->frames;
+	mvod_ipc_publish_status(r->ipc, &st);
+	r->last_status = now;
+}
+
+static void record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
+		   const struct mvod_pose *gt)
+{
+	struct mvod_run_summary *s = r->sum;
+	s->frames++;
+	s->tracked += res->status == MVOD_FRAME_MOTION || res->status == MVOD_FRAME_ROTATION;
+	for (int k = 0; k < MVOD_STAGE_COUNT; k++) {
+		r->stage_total[k] += res->ms[k];
+		s->stage_ms_max[k] = fmax(s->stage_ms_max[k], res->ms[k]);
+	}
+	if (res->state != r->state) {
+		LOG(INFO, "frame %lld: %s -> %s (%s)", (long long)f->index,
+		    mvod_track_state_name(r->state), mvod_track_state_name(res->state),
+		    mvod_frame_status_name(res->status));
+		r->state = res->state;
+	}
+	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)",
+	    (long long)f->index, mvod_frame_status_name(res->status), res->features, res->matches,
+	    res->inliers, res->step_m, mvod_scale_source_name(res->scale_source));
+	mvod_path_add(&r->est_path, res->pose.t);
+	if (gt) {
+		mvod_path_add(&r->gt_path, gt->t);
+		if (r->have_prev)
+			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
+		if (r->have_prev) {
+			double d[3] = {gt->t[0] - r->prev_gt.t[0], gt->t[1] - r->prev_gt.t[1],
+				       gt->t[2] - r->prev_gt.t[2]};
+			s->path_len_m += mvod_vec3_norm(d);
+		}
+		r->prev_gt = *gt;
+	}
+	r->prev_est = res->pose;
+	r->have_prev = 1;
+}
+
+static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
+{
+	if (r->ipc) {
+		mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res);
+		if (r->sum->frames == 1 || now_s() - r->last_status >= 1.0)
+			publish_status(r, f, res);
+	}
+	if (r->traj && !r->traj_failed) {
+		int ret = mvod_traj_writer_add(r->traj, f->utime / 1e6, &res->pose);
+		if (ret) {
+			/* Once, not per frame: poses keep flowing over LCM. */
+			LOG(ERROR, "trajectory %s: %s; no further poses are written to it",
+			    r->o->trajectory, strerror(-ret));
+			r->traj_failed = 1;
+		}
+	}
+}
+
+static int process_frame(struct run *r, const struct mvod_frame *f, double capture_ms)
+{
+	const struct mvod_pose *gt = gt_for(r, f);
+	if (r->o->vo.scale_mode == MVOD_SCALE_MODE_GT && !gt) {
+		LOG(ERROR, "frame %lld has no ground-truth pose in %s (needed by --scale gt)",
+		    (long long)f->index, r->o->gt);
+		return -ENOENT;
+	}
+	struct mvod_vo_result res;
+	int ret = mvod_vo_process(r->vo, &f->img, gt ? gt->t : NULL, &res);
+	if (ret) {
+		LOG(ERROR, "frame %lld: processing failed: %s", (long long)f->index, strerror(-ret));
+		return ret;
+	}
+	res.ms[MVOD_STAGE_CAPTURE] = capture_ms;
+	record(r, f, &res, gt);
+	emit(r, f, &res);
+	return 0;
+}
+
+static int loop(struct run *r, volatile sig_atomic_t *stop)
+{
+	int skipped = 0;
+	while (!(stop && *stop) && !(r->o->max_frames && r->sum->frames >= r->o->max_frames)) {
+		struct mvod_frame f;
+		double t0 = now_s();
+		int ret = mvod_source_read(r->src, &f);
+		if (ret == -ENODATA)
+			return 0;
+		if (ret == -EAGAIN)
+			continue;
+		if (ret == -EINVAL) {
+			/* One bad frame (wrong size, undecodable image) is skipped, not fatal. */
+			if (skipped++ == 0)
+				LOG(WARN, "%s: skipping a frame that cannot be decoded at its size",
+				    r->o->source);
+			continue;
+		}
+		if (ret) {
+			LOG(ERROR, "%s: reading frame %lld failed: %s", r->o->source,
+			    (long long)r->sum->frames, strerror(-ret));
+			return ret;
+		}
+		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
+		if (ret)
+			return ret;
+	}
+	return 0;
+}
+
+static void summarise(struct run *r)
+{
+	struct mvod_run_summary *s = r->sum;
+	s->wall_s = now_s() - r->t_start;
+	s->fps = s->wall_s > 0 ? s->frames / s->wall_s : 0;
+	s->held = s->frames - s->tracked;
+	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
+		s->stage_ms_mean[k] = s->frames ? r->stage_total[k] / (double)s->frames : 0;
+	mvod_rpe_finish(&s->rpe);
+	s->have_gt = r->gt_path.n > 0 && r->gt_path.n == r->est_path.n;
+	if (!s->have_gt)
+		return;
+	double R[9], t[3], sc;
+	bool sim3 = r->o->vo.scale_mode == MVOD_SCALE_MODE_AUTO;
+	if (mvod_umeyama(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, sim3, R, t, &sc) == 0)
+		s->ate_rmse_m = mvod_ate_rmse(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, R, t, sc);
+	else
+		s->ate_rmse_m = NAN; /* static or too short: no alignment exists */
+}
+
+static int write_plot(struct run *r)
+{
+	if (!r->o->plot)
+		return 0;
+	char title[256];
+	snprintf(title, sizeof(title), "mvod: %s", r->o->source);
+	int ret = mvod_plot_topdown(r->o->plot, title, r->est_path.xyz, r->est_path.n,
+				    r->have_prev ? r->prev_est.R : NULL, r->gt_path.xyz, r->gt_path.n);
+	if (ret)
+		LOG(ERROR, "cannot write plot %s: %s", r->o->plot, strerror(-ret));
+	return ret;
+}
+
+int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile sig_atomic_t *stop,
+	     struct mvod_run_summary *summary)
+{
+	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_STATE_STARTING};
+	memset(summary, 0, sizeof(*summary));
+	int ret = open_inputs(&r);
+	if (!ret)
+		ret = open_outputs(&r);
+	if (!ret) {
+		r.t_start = now_s();
+		ret = loop(&r, stop);
+		summarise(&r);
+		int pret = write_plot(&r);
+		if (!ret)
+			ret = pret;
+	}
+	int tret = mvod_traj_writer_close(r.traj);
+	if (tret && !r.traj_failed) {
+		LOG(ERROR, "trajectory %s: %s", opts->trajectory, strerror(-tret));
+		if (!ret)
+			ret = tret;
+	}
+	mvod_path_fini(&r.est_path);
+	mvod_path_fini(&r.gt_path);
+	mvod_vo_destroy(r.vo);
+	mvod_traj_free(&r.gt);
+	mvod_source_close(r.src);
+	return ret;
+}

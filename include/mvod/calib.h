@@ -5,6 +5,10 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define MVOD_CALIB_FORMAT "mvod-calibration/1"
 #define MVOD_MAX_DIST 14
 
@@ -50,5 +54,9 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
  * existing file is replaced whole or not at all. meta may be NULL.
  */
 int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struct mvod_calib_meta *meta);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

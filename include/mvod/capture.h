@@ -11,6 +11,10 @@
 #include "mvod/calib.h"
 #include "mvod/image.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 struct mvod_frame {
 	struct mvod_image img; /* borrowed from the source: valid until the next read or close */
 	int64_t utime;         /* source clock (media time, times.txt), microseconds */
@@ -49,5 +53,9 @@ void mvod_source_close(struct mvod_source *src);
 
 /* The registered backends, NULL-terminated (for --help and tests). */
 extern const struct mvod_source_ops *const mvod_source_backends[];
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -6,6 +6,10 @@
 
 #include "mvod/geom.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /*
  * Umeyama alignment of src onto dst (n x 3 each): dst ~ s R src + t. With with_scale false,
  * s = 1 (SE(3)). Returns -EINVAL for n < 3 or degenerate input.
@@ -29,5 +33,9 @@ struct mvod_rpe {
 void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct mvod_pose *e1,
 		  const struct mvod_pose *g0, const struct mvod_pose *g1);
 void mvod_rpe_finish(struct mvod_rpe *acc);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -2,6 +2,10 @@
 #ifndef MVOD_GEOM_H
 #define MVOD_GEOM_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /*
  * A camera-to-world pose: X_world = R * X_cam + t. The world frame is the first camera's
  * frame, OpenCV convention (x right, y down, z forward).
@@ -34,5 +38,9 @@ double mvod_rot_angle(const double R[9]);
 void mvod_rot_exp(const double w[3], double R[9]);
 /* Angle between two vectors in radians; 0 when either is zero. */
 double mvod_vec3_angle(const double a[3], const double b[3]);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

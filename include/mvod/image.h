@@ -4,6 +4,10 @@
 
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 enum mvod_pixfmt {
 	MVOD_PIX_GREY = 0, /* 8-bit, 1 channel */
 	MVOD_PIX_BGR = 1,  /* 8-bit, 3 channels, OpenCV order */
@@ -16,5 +20,9 @@ struct mvod_image {
 	enum mvod_pixfmt fmt;
 	uint8_t *data;
 };
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -8,6 +8,10 @@
 
 #include "mvod/vo.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #define MVOD_DEFAULT_POSE_CHANNEL "MVOD_POSE"
 #define MVOD_DEFAULT_STATUS_CHANNEL "MVOD_STATUS"
 
@@ -38,5 +42,9 @@ void mvod_ipc_destroy(struct mvod_ipc *ipc);
 int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 			  const struct mvod_vo_result *res);
 int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

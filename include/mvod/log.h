@@ -2,6 +2,10 @@
 #ifndef MVOD_LOG_H
 #define MVOD_LOG_H
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 enum mvod_log_level {
 	MVOD_LOG_ERROR = 0,
 	MVOD_LOG_WARN = 1,
@@ -17,5 +21,9 @@ void mvod_log(enum mvod_log_level level, const char *fmt, ...)
 	__attribute__((format(printf, 2, 3)));
 
 #define LOG(level, ...) mvod_log(MVOD_LOG_##level, __VA_ARGS__)
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -5,9 +5,14 @@
 #include <signal.h>
 #include <stdint.h>
 
+#include "mvod/eval.h"
 #include "mvod/ipc.h"
 #include "mvod/traj.h"
 #include "mvod/vo.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 struct mvod_run_opts {
 	const char *source;     /* URI */
@@ -40,5 +45,9 @@ struct mvod_run_summary {
  */
 int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile sig_atomic_t *stop,
 	     struct mvod_run_summary *summary);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

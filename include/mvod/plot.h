@@ -4,6 +4,10 @@
 
 #include "mvod/geom.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /*
  * Top-down view (x right, z forward: the ground plane of a camera frame) of an estimated path
  * against ground truth: metric axes with ticks, equal aspect, start and end markers, a heading
@@ -13,5 +17,9 @@
  */
 int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz, int n_est,
 		      const double heading[9], const double *gt_xyz, int n_gt);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -7,6 +7,10 @@
 
 #include "mvod/geom.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 enum mvod_traj_format {
 	MVOD_TRAJ_TUM = 0,   /* "t tx ty tz qx qy qz qw" */
 	MVOD_TRAJ_KITTI = 1, /* row-major 3x4 [R|t], one pose per line */
@@ -50,5 +54,9 @@ struct mvod_path {
 int mvod_path_init(struct mvod_path *p, int cap);
 void mvod_path_add(struct mvod_path *p, const double xyz[3]);
 void mvod_path_fini(struct mvod_path *p);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

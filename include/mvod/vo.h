@@ -13,6 +13,10 @@
 #include "mvod/geom.h"
 #include "mvod/image.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Tracking states; values are those of mvod.pose_t / mvod.status_t. */
 enum mvod_track_state {
 	MVOD_STATE_STARTING = 0,
@@ -36,6 +40,13 @@ enum mvod_scale_mode {
 	MVOD_SCALE_MODE_AUTO = 0,
 	MVOD_SCALE_MODE_GT = 1,
 };
+
+/* Robust estimator of the essential matrix. */
+enum mvod_robust_method {
+	MVOD_ROBUST_MAGSAC = 0, /* MAGSAC++ (OpenCV USAC): no hard threshold to tune, fewer wrong models */
+	MVOD_ROBUST_RANSAC = 1, /* classic RANSAC with a fixed inlier threshold */
+};
+int mvod_robust_method_parse(const char *name, enum mvod_robust_method *out);
 
 /* What happened to a frame (the "mark" on a frame whose pose was held). */
 enum mvod_frame_status {
@@ -67,7 +78,8 @@ struct mvod_vo_params {
 	int max_features;       /* ORB feature cap. 2000 */
 	double ratio;           /* Lowe's ratio test threshold; >= 1 turns it off. 0.8 */
 	bool cross_check;       /* keep only mutual best matches. true */
-	double ransac_px;       /* E-RANSAC inlier threshold, pixels. 1.0 */
+	enum mvod_robust_method robust; /* MAGSAC */
+	double ransac_px;       /* inlier threshold (MAGSAC: its upper bound), pixels. 1.0 */
 	double ransac_conf;     /* E-RANSAC confidence. 0.999 */
 	int min_matches;        /* fewer matches than this: frame not tracked. 30 */
 	int min_inliers;        /* fewer E inliers in front of both cameras: not tracked. 20 */
@@ -107,5 +119,9 @@ void mvod_vo_camera(const struct mvod_vo *vo, struct mvod_camera *cam);
  */
 int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
 		    struct mvod_vo_result *res);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

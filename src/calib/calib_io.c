@@ -1,2 +1,355 @@
-/* placeholder until the module lands */
-typedef int mvod_placeholder_t;
+#include "mvod/calib.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+/* Calibration files are small; anything bigger is not one. */
+#define CALIB_MAX_BYTES (4 * 1024 * 1024)
+
+static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+
+static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
+{
+	if (err && errlen) {
+		va_list ap;
+		va_start(ap, fmt);
+		vsnprintf(err, errlen, fmt, ap);
+		va_end(ap);
+	}
+	return code;
+}
+
+static const char *const model_names[] = {"pinhole-radtan", "fisheye-kb4"};
+
+const char *mvod_cam_model_name(enum mvod_cam_model model)
+{
+	return (unsigned)model < 2 ? model_names[model] : "unknown";
+}
+
+int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out)
+{
+	for (int i = 0; i < 2; i++) {
+		if (strcmp(name, model_names[i]) == 0) {
+			*out = (enum mvod_cam_model)i;
+			return 0;
+		}
+	}
+	return -EINVAL;
+}
+
+bool mvod_camera_has_distortion(const struct mvod_camera *cam)
+{
+	for (int i = 0; i < cam->n_dist; i++)
+		if (cam->dist[i] != 0.0)
+			return true;
+	return false;
+}
+
+/* Reads a whole small file into a NUL-terminated heap buffer. */
+static int read_text(const char *path, char **out, char *err, size_t errlen)
+{
+	FILE *f = fopen(path, "rb");
+	if (!f)
+		return fail(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
+	char *buf = malloc(CALIB_MAX_BYTES + 1);
+	int ret = 0;
+	if (!buf) {
+		ret = -ENOMEM;
+		goto out;
+	}
+	size_t n = fread(buf, 1, CALIB_MAX_BYTES + 1, f);
+	if (ferror(f)) {
+		ret = fail(err, errlen, -EIO, "cannot read %s", path);
+		goto out;
+	}
+	if (n > CALIB_MAX_BYTES) {
+		ret = fail(err, errlen, -EFBIG, "%s is larger than %d MiB: not a calibration file", path,
+			   CALIB_MAX_BYTES >> 20);
+		goto out;
+	}
+	buf[n] = '\0';
+	*out = buf;
+	buf = NULL;
+out:
+	free(buf);
+	fclose(f);
+	return ret;
+}
+
+static bool valid_intrinsics(const struct mvod_camera *c)
+{
+	return isfinite(c->fx) && isfinite(c->fy) && isfinite(c->cx) && isfinite(c->cy) && c->fx > 0 &&
+	       c->fy > 0;
+}
+
+static int json_number_array(const cJSON *arr, double *dst, int min, int max, int *count)
+{
+	if (!cJSON_IsArray(arr))
+		return -EINVAL;
+	int n = cJSON_GetArraySize(arr);
+	if (n < min || n > max)
+		return -EINVAL;
+	for (int i = 0; i < n; i++) {
+		const cJSON *v = cJSON_GetArrayItem(arr, i);
+		if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
+			return -EINVAL;
+		dst[i] = v->valuedouble;
+	}
+	if (count)
+		*count = n;
+	return 0;
+}
+
+/* K as [[fx,0,cx],[0,fy,cy],[0,0,1]] or as 9 numbers row-major. */
+static int json_K(const cJSON *K, struct mvod_camera *cam)
+{
+	double k[9];
+	if (json_number_array(K, k, 9, 9, NULL) != 0) {
+		if (!cJSON_IsArray(K) || cJSON_GetArraySize(K) != 3)
+			return -EINVAL;
+		for (int r = 0; r < 3; r++)
+			if (json_number_array(cJSON_GetArrayItem(K, r), k + 3 * r, 3, 3, NULL) != 0)
+				return -EINVAL;
+	}
+	if (k[6] != 0 || k[7] != 0 || k[8] != 1 || k[3] != 0)
+		return -EINVAL;
+	cam->fx = k[0];
+	cam->fy = k[4];
+	cam->cx = k[2];
+	cam->cy = k[5];
+	return k[1] == 0 ? 0 : -EINVAL; /* skew is not modelled */
+}
+
+static int valid_dist_count(enum mvod_cam_model model, int n)
+{
+	if (model == MVOD_CAM_FISHEYE_KB4)
+		return n == 4;
+	return n == 0 || n == 4 || n == 5 || n == 8 || n == 12 || n == 14;
+}
+
+int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	struct mvod_camera c = {0};
+	int ret = 0;
+	cJSON *root = cJSON_Parse(text);
+	if (!root)
+		return fail(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
+			    cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "?");
+	const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
+	if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, MVOD_CALIB_FORMAT) != 0) {
+		ret = fail(err, errlen, -EINVAL, "\"format\" must be \"%s\"", MVOD_CALIB_FORMAT);
+		goto out;
+	}
+	const cJSON *model = cJSON_GetObjectItemCaseSensitive(root, "model");
+	if (!cJSON_IsString(model) || mvod_cam_model_parse(model->valuestring, &c.model) != 0) {
+		ret = fail(err, errlen, -EINVAL,
+			   "\"model\" must be \"pinhole-radtan\" or \"fisheye-kb4\"");
+		goto out;
+	}
+	double size[2];
+	if (json_number_array(cJSON_GetObjectItemCaseSensitive(root, "image_size"), size, 2, 2,
+			      NULL) != 0 ||
+	    size[0] < 1 || size[1] < 1 || size[0] > 65535 || size[1] > 65535 ||
+	    size[0] != floor(size[0]) || size[1] != floor(size[1])) {
+		ret = fail(err, errlen, -EINVAL, "\"image_size\" must be [width, height] in pixels");
+		goto out;
+	}
+	c.width = (int)size[0];
+	c.height = (int)size[1];
+	if (json_K(cJSON_GetObjectItemCaseSensitive(root, "K"), &c) != 0 || !valid_intrinsics(&c)) {
+		ret = fail(err, errlen, -EINVAL,
+			   "\"K\" must be [[fx,0,cx],[0,fy,cy],[0,0,1]] with fx, fy > 0");
+		goto out;
+	}
+	const cJSON *dist = cJSON_GetObjectItemCaseSensitive(root, "distortion");
+	if (json_number_array(dist, c.dist, 0, MVOD_MAX_DIST, &c.n_dist) != 0 ||
+	    !valid_dist_count(c.model, c.n_dist)) {
+		ret = fail(err, errlen, -EINVAL,
+			   "\"distortion\" must hold %s numbers for model %s",
+			   c.model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14",
+			   mvod_cam_model_name(c.model));
+		goto out;
+	}
+	*cam = c;
+out:
+	cJSON_Delete(root);
+	return ret;
+}
+
+/* "P0: 12 numbers": fx = P[0], cx = P[2], fy = P[5], cy = P[6]. */
+static int parse_kitti(const char *text, struct mvod_camera *cam)
+{
+	const char *line = text;
+	while (line && *line) {
+		if (strncmp(line, "P0:", 3) == 0) {
+			double p[12];
+			const char *s = line + 3;
+			for (int i = 0; i < 12; i++) {
+				char *end;
+				p[i] = strtod(s, &end);
+				if (end == s || !isfinite(p[i]))
+					return -EINVAL;
+				s = end;
+			}
+			*cam = (struct mvod_camera){.fx = p[0], .cx = p[2], .fy = p[5], .cy = p[6],
+						    .model = MVOD_CAM_PINHOLE_RADTAN};
+			return valid_intrinsics(cam) ? 0 : -EINVAL;
+		}
+		line = strchr(line, '\n');
+		if (line)
+			line++;
+	}
+	return -ENOENT;
+}
+
+int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	char *text = NULL;
+	int ret = read_text(path, &text, err, errlen);
+	if (ret)
+		return ret;
+	ret = parse_kitti(text, cam);
+	if (ret == -ENOENT)
+		fail(err, errlen, -EINVAL, "%s: no \"P0:\" line (not a KITTI calib.txt)", path);
+	else if (ret)
+		fail(err, errlen, -EINVAL, "%s: \"P0:\" needs 12 numbers with fx, fy > 0", path);
+	free(text);
+	return ret ? -EINVAL : 0;
+}
+
+int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	char *text = NULL;
+	int ret = read_text(path, &text, err, errlen);
+	if (ret)
+		return ret;
+	const char *p = text;
+	while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')
+		p++;
+	char why[200] = "";
+	if (*p == '{') {
+		ret = mvod_calib_parse_json(text, cam, why, sizeof(why));
+		if (ret)
+			fail(err, errlen, ret, "%s: %s", path, why);
+	} else if (strstr(text, "P0:")) {
+		ret = mvod_calib_load_kitti(path, cam, err, errlen);
+	} else {
+		ret = fail(err, errlen, -EINVAL,
+			   "%s: unknown calibration format (expected mvod JSON or KITTI calib.txt)",
+			   path);
+	}
+	free(text);
+	return ret;
+}
+
+static cJSON *number_row(const double *v, int n)
+{
+	return cJSON_CreateDoubleArray(v, n);
+}
+
+static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_calib_meta *meta)
+{
+	cJSON *root = cJSON_CreateObject();
+	if (!root)
+		return NULL;
+	cJSON_AddStringToObject(root, "format", MVOD_CALIB_FORMAT);
+	cJSON_AddStringToObject(root, "model", mvod_cam_model_name(cam->model));
+	double size[2] = {cam->width, cam->height};
+	cJSON_AddItemToObject(root, "image_size", number_row(size, 2));
+	const double K[3][3] = {{cam->fx, 0, cam->cx}, {0, cam->fy, cam->cy}, {0, 0, 1}};
+	cJSON *k = cJSON_CreateArray();
+	for (int r = 0; r < 3; r++)
+		cJSON_AddItemToArray(k, number_row(K[r], 3));
+	cJSON_AddItemToObject(root, "K", k);
+	cJSON_AddItemToObject(root, "distortion", number_row(cam->dist, cam->n_dist));
+	char when[32];
+	time_t now = time(NULL);
+	struct tm tm;
+	strftime(when, sizeof(when), "%Y-%m-%dT%H:%M:%SZ", gmtime_r(&now, &tm));
+	cJSON_AddStringToObject(root, "created", when);
+	if (meta) {
+		if (meta->rms_px >= 0)
+			cJSON_AddNumberToObject(root, "rms_px", meta->rms_px);
+		if (meta->board[0])
+			cJSON_AddStringToObject(root, "board", meta->board);
+		if (meta->source[0])
+			cJSON_AddStringToObject(root, "source", meta->source);
+	}
+	return root;
+}
+
+/* Writes all of buf to a temporary file beside path, then renames it over path. */
+static int write_replace(const char *path, const char *buf, size_t len)
+{
+	char tmp[4096];
+	if (snprintf(tmp, sizeof(tmp), "%s.tmp-XXXXXX", path) >= (int)sizeof(tmp))
+		return -ENAMETOOLONG;
+	int fd = mkstemp(tmp);
+	if (fd < 0)
+		return -errno;
+	int ret = 0;
+	for (size_t off = 0; off < len;) {
+		ssize_t w = write(fd, buf + off, len - off);
+		if (w < 0 && errno == EINTR)
+			continue;
+		if (w < 0) {
+			ret = -errno;
+			goto fail;
+		}
+		off += (size_t)w;
+	}
+	if (fchmod(fd, 0644) != 0 || fsync(fd) != 0) {
+		ret = -errno;
+		goto fail;
+	}
+	if (close(fd) != 0) {
+		fd = -1;
+		ret = -errno;
+		goto fail;
+	}
+	fd = -1;
+	if (rename(tmp, path) != 0) {
+		ret = -errno;
+		goto fail;
+	}
+	return 0;
+fail:
+	if (fd >= 0)
+		close(fd);
+	unlink(tmp);
+	return ret;
+}
+
+int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struct mvod_calib_meta *meta)
+{
+	cJSON *root = calib_to_json(cam, meta);
+	if (!root)
+		return -ENOMEM;
+	char *text = cJSON_Print(root);
+	cJSON_Delete(root);
+	if (!text)
+		return -ENOMEM;
+	size_t len = strlen(text);
+	text[len] = '\0';
+	char *withnl = realloc(text, len + 2);
+	if (!withnl) {
+		free(text);
+		return -ENOMEM;
+	}
+	withnl[len] = '\n';
+	withnl[len + 1] = '\0';
+	int ret = write_replace(path, withnl, len + 1);
+	free(withnl);
+	return ret;
+}

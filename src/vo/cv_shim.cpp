@@ -1,1 +1,225 @@
+#include "cv_shim.h"
+
+#include <cerrno>
+#include <new>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+/* Every entry point runs its body through this: no exception crosses into C. */
+template <typename F> static int guarded(F &&body) noexcept
+{
+	try {
+		return body();
+	} catch (const std::bad_alloc &) {
+		return -ENOMEM;
+	} catch (const cv::Exception &) {
+		return -EIO;
+	} catch (...) {
+		return -EIO;
+	}
+}
+
+static cv::Mat view(const struct mvod_image *img)
+{
+	int type = img->fmt == MVOD_PIX_GREY ? CV_8UC1 : CV_8UC3;
+	return cv::Mat(img->h, img->w, type, img->data, (size_t)img->stride);
+}
+
+static struct mvod_image image_of(cv::Mat &m)
+{
+	return {m.cols, m.rows, (int)m.step[0], MVOD_PIX_GREY, m.data};
+}
+
+struct mvod_cv_preproc {
+	int in_w, in_h, out_w, out_h;
+	int blur_ksize;
+	bool remap; /* undistortion (and resize) through maps computed once */
+	cv::Mat map1, map2;
+	cv::Mat grey, scaled, blurred;
+};
+
+static void build_maps(mvod_cv_preproc *p, const struct mvod_camera *cam, const cv::Matx33d &Knew)
+{
+	cv::Matx33d K(cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1);
+	cv::Mat D(1, cam->n_dist, CV_64F, const_cast<double *>(cam->dist));
+	cv::Size size(p->out_w, p->out_h);
+	if (cam->model == MVOD_CAM_FISHEYE_KB4)
+		cv::fisheye::initUndistortRectifyMap(K, D, cv::Matx33d::eye(), Knew, size, CV_16SC2,
+						     p->map1, p->map2);
+	else
+		cv::initUndistortRectifyMap(K, D, cv::noArray(), Knew, size, CV_16SC2, p->map1,
+					    p->map2);
+}
+
+extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resize, int blur_ksize,
+				      struct mvod_camera *out_cam, struct mvod_cv_preproc **out)
+{
+	if (cam->width <= 0 || cam->height <= 0 || !(resize > 0 && resize <= 1) ||
+	    (blur_ksize && (blur_ksize < 0 || blur_ksize % 2 == 0)))
+		return -EINVAL;
+	return guarded([&] {
+		auto *p = new mvod_cv_preproc();
+		p->in_w = cam->width;
+		p->in_h = cam->height;
+		p->out_w = (int)(cam->width * resize + 0.5);
+		p->out_h = (int)(cam->height * resize + 0.5);
+		p->blur_ksize = blur_ksize;
+		double sx = (double)p->out_w / cam->width, sy = (double)p->out_h / cam->height;
+		/* Pixel centres scale about -0.5 so that resize keeps the principal point honest. */
+		struct mvod_camera c = {};
+		c.width = p->out_w;
+		c.height = p->out_h;
+		c.fx = cam->fx * sx;
+		c.fy = cam->fy * sy;
+		c.cx = (cam->cx + 0.5) * sx - 0.5;
+		c.cy = (cam->cy + 0.5) * sy - 0.5;
+		c.model = MVOD_CAM_PINHOLE_RADTAN;
+		p->remap = mvod_camera_has_distortion(cam);
+		if (p->remap)
+			build_maps(p, cam, cv::Matx33d(c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1));
+		p->grey.create(p->in_h, p->in_w, CV_8UC1);
+		p->scaled.create(p->out_h, p->out_w, CV_8UC1);
+		p->blurred.create(p->out_h, p->out_w, CV_8UC1);
+		*out_cam = c;
+		*out = p;
+		return 0;
+	});
+}
+
+extern "C" int mvod_cv_preproc_run(struct mvod_cv_preproc *p, const struct mvod_image *in,
+				   struct mvod_image *out)
+{
+	if (in->w != p->in_w || in->h != p->in_h)
+		return -EINVAL;
+	if (in->fmt != MVOD_PIX_GREY && in->fmt != MVOD_PIX_BGR)
+		return -EINVAL;
+	return guarded([&] {
+		cv::Mat src = view(in);
+		if (in->fmt == MVOD_PIX_BGR) {
+			cv::cvtColor(src, p->grey, cv::COLOR_BGR2GRAY);
+			src = p->grey;
+		}
+		cv::Mat *cur = &src;
+		if (p->remap) {
+			cv::remap(*cur, p->scaled, p->map1, p->map2, cv::INTER_LINEAR,
+				  cv::BORDER_CONSTANT);
+			cur = &p->scaled;
+		} else if (p->out_w != p->in_w || p->out_h != p->in_h) {
+			cv::resize(*cur, p->scaled, p->scaled.size(), 0, 0, cv::INTER_AREA);
+			cur = &p->scaled;
+		}
+		if (p->blur_ksize > 1) {
+			cv::GaussianBlur(*cur, p->blurred, cv::Size(p->blur_ksize, p->blur_ksize), 0);
+			cur = &p->blurred;
+		}
+		*out = image_of(*cur);
+		return 0;
+	});
+}
+
+extern "C" void mvod_cv_preproc_destroy(struct mvod_cv_preproc *p)
+{
+	delete p;
+}
+
+struct mvod_cv_orb {
+	cv::Ptr<cv::ORB> orb;
+	std::vector<cv::KeyPoint> kps;
+	cv::Mat desc;
+};
+
+extern "C" int mvod_cv_orb_create(int max_features, int width, int height, struct mvod_cv_orb **out)
+{
+	if (max_features < 8 || width < 32 || height < 32)
+		return -EINVAL;
+	return guarded([&] {
+		auto *o = new mvod_cv_orb();
+		o->orb = cv::ORB::create(max_features);
+		o->kps.reserve((size_t)max_features * 2);
+		o->desc.create(max_features * 2, MVOD_ORB_DESC_BYTES, CV_8U);
+		*out = o;
+		return 0;
+	});
+}
+
+extern "C" int mvod_cv_orb_detect(struct mvod_cv_orb *o, const struct mvod_image *grey,
+				  struct mvod_features *out)
+{
+	if (grey->fmt != MVOD_PIX_GREY)
+		return -EINVAL;
+	return guarded([&] {
+		o->orb->detectAndCompute(view(grey), cv::noArray(), o->kps, o->desc);
+		int n = std::min((int)o->kps.size(), out->cap);
+		for (int i = 0; i < n; i++) {
+			out->kp[i].x = o->kps[(size_t)i].pt.x;
+			out->kp[i].y = o->kps[(size_t)i].pt.y;
+			memcpy(out->desc + (size_t)i * MVOD_ORB_DESC_BYTES, o->desc.ptr(i),
+			       MVOD_ORB_DESC_BYTES);
+		}
+		out->n = n;
+		return 0;
+	});
+}
+
+extern "C" void mvod_cv_orb_destroy(struct mvod_cv_orb *o)
+{
+	delete o;
+}
+
+extern "C" int mvod_cv_find_essential(const double *x1, const double *x2, int n, bool magsac,
+				      double thresh, double conf, double E[9], uint8_t *mask,
+				      int *n_inliers)
+{
+	if (n < 5)
+		return -EINVAL;
+	return guarded([&] {
+		cv::Mat m1(n, 2, CV_64F, const_cast<double *>(x1));
+		cv::Mat m2(n, 2, CV_64F, const_cast<double *>(x2));
+		cv::Mat msk(n, 1, CV_8U, mask);
+		int method = magsac ? cv::USAC_MAGSAC : cv::RANSAC;
+		cv::Mat e = cv::findEssentialMat(m1, m2, cv::Matx33d::eye(), method, conf, thresh, msk);
+		/* Several solutions come back stacked; RANSAC has already picked the best first. */
+		if (e.rows < 3 || e.cols != 3)
+			return -ENODATA;
+		for (int i = 0; i < 9; i++)
+			E[i] = e.at<double>(i / 3, i % 3);
+		*n_inliers = cv::countNonZero(msk);
+		return 0;
+	});
+}
+
+extern "C" int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3])
+{
+	return guarded([&] {
+		cv::Matx33d e(E), r1, r2;
+		cv::Vec3d tv;
+		cv::decomposeEssentialMat(e, r1, r2, tv);
+		for (int i = 0; i < 9; i++) {
+			R1[i] = r1.val[i];
+			R2[i] = r2.val[i];
+		}
+		for (int i = 0; i < 3; i++)
+			t[i] = tv[i];
+		return 0;
+	});
+}
+
+extern "C" int mvod_cv_svd3(const double A[9], double U[9], double S[3], double Vt[9])
+{
+	return guarded([&] {
+		cv::Matx33d a(A), u, vt;
+		cv::Vec3d s;
+		cv::SVD::compute(a, s, u, vt, cv::SVD::FULL_UV);
+		for (int i = 0; i < 9; i++) {
+			U[i] = u.val[i];
+			Vt[i] = vt.val[i];
+		}
+		for (int i = 0; i < 3; i++)
+			S[i] = s[i];
+		return 0;
+	});
+}

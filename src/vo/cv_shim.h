@@ -52,26 +52,13 @@ int mvod_cv_orb_detect(struct mvod_cv_orb *orb, const struct mvod_image *grey,
 		       struct mvod_features *out);
 void mvod_cv_orb_destroy(struct mvod_cv_orb *orb);
 
-/* Brute-force Hamming matcher with preallocated distance tables for cap features. */
-struct mvod_cv_matcher;
-int mvod_cv_matcher_create(int cap, struct mvod_cv_matcher **out);
 /*
- * Matches a to b: nearest neighbour passing Lowe's ratio test (ratio >= 1 disables it) and,
- * with cross_check, only when a's best in b has a as its best in a. Writes at most cap matches.
+ * Essential matrix (five-point) from normalised correspondences x1 -> x2 (n x 2 each), so
+ * that x2^T E x1 = 0, by MAGSAC++ or by classic RANSAC; thresh is in normalised units (pixels
+ * over focal length). mask[n] gets 1 for inliers. -ENODATA when no model is found.
  */
-int mvod_cv_match(struct mvod_cv_matcher *m, const struct mvod_features *a,
-		  const struct mvod_features *b, double ratio, bool cross_check,
-		  struct mvod_match *out, int cap, int *n_out);
-void mvod_cv_matcher_destroy(struct mvod_cv_matcher *m);
-
-/*
- * Essential matrix by RANSAC (five-point) from pixel correspondences p1 -> p2 (n x 2 each) of
- * a pinhole camera; x2^T E x1 = 0 in normalised coordinates. mask[n] gets 1 for inliers.
- * -ENODATA when RANSAC finds no model.
- */
-int mvod_cv_find_essential(const double *p1, const double *p2, int n, double fx, double fy,
-			   double cx, double cy, double thresh_px, double conf, double E[9],
-			   uint8_t *mask, int *n_inliers);
+int mvod_cv_find_essential(const double *x1, const double *x2, int n, bool magsac, double thresh,
+			   double conf, double E[9], uint8_t *mask, int *n_inliers);
 /* The four candidates are (R1, t), (R1, -t), (R2, t), (R2, -t); |t| = 1. */
 int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3]);
 /* A = U diag(S) Vt, S descending. */

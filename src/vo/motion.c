@@ -1,2 +1,166 @@
-/* placeholder until the module lands */
-typedef int mvod_placeholder_t;
+#include "motion.h"
+
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "cv_shim.h"
+#include "mvod/geom.h"
+
+bool mvod_triangulate_midpoint(const double R[9], const double t[3], const double x1[2],
+			       const double x2[2], double *d1, double *d2)
+{
+	/* min |d1 a - d2 b + t| with a = R x1, b = x2: a 2x2 normal system. */
+	const double r1[3] = {x1[0], x1[1], 1.0};
+	const double b[3] = {x2[0], x2[1], 1.0};
+	double a[3];
+	mvod_mat3_vec(R, r1, a);
+	double aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+	double bb = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+	double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+	double at = a[0] * t[0] + a[1] * t[1] + a[2] * t[2];
+	double bt = b[0] * t[0] + b[1] * t[1] + b[2] * t[2];
+	double det = aa * bb - ab * ab;
+	if (det <= 1e-12 * aa * bb)
+		return false;
+	*d1 = (ab * bt - at * bb) / det;
+	*d2 = (aa * bt - ab * at) / det;
+	return true;
+}
+
+static int count_in_front(const double R[9], const double t[3], const double *x1, const double *x2,
+			  const uint8_t *mask, int n, double *depth1)
+{
+	int count = 0;
+	double base = mvod_vec3_norm(t);
+	for (int i = 0; i < n; i++) {
+		double d1 = 0, d2 = 0;
+		bool ok = mask[i] && mvod_triangulate_midpoint(R, t, x1 + 2 * i, x2 + 2 * i, &d1, &d2) &&
+			  d1 > 0 && d2 > 0 && d1 <= MVOD_MOTION_MAX_DEPTH * base;
+		if (depth1)
+			depth1[i] = ok ? d1 : 0.0;
+		count += ok;
+	}
+	return count;
+}
+
+int mvod_motion_cheirality(const double R1[9], const double R2[9], const double t[3],
+			   const double *x1, const double *x2, const uint8_t *mask, int n,
+			   double R[9], double t_out[3], double *depth1)
+{
+	const double *Rs[4] = {R1, R1, R2, R2};
+	const double sign[4] = {1, -1, 1, -1};
+	int best = -1, best_count = -1;
+	for (int k = 0; k < 4; k++) {
+		double tk[3] = {sign[k] * t[0], sign[k] * t[1], sign[k] * t[2]};
+		int c = count_in_front(Rs[k], tk, x1, x2, mask, n, NULL);
+		if (c > best_count) {
+			best_count = c;
+			best = k;
+		}
+	}
+	memcpy(R, Rs[best], 9 * sizeof(double));
+	for (int i = 0; i < 3; i++)
+		t_out[i] = sign[best] * t[i];
+	if (depth1)
+		count_in_front(R, t_out, x1, x2, mask, n, depth1);
+	return best_count;
+}
+
+static void swap_d(double *a, double *b)
+{
+	double t = *a;
+	*a = *b;
+	*b = t;
+}
+
+double mvod_median(double *v, int n)
+{
+	/* Quickselect (Hoare): no allocation, linear on average. */
+	int lo = 0, hi = n - 1, k = n / 2;
+	while (lo < hi) {
+		double pivot = v[(lo + hi) / 2];
+		int i = lo, j = hi;
+		while (i <= j) {
+			while (v[i] < pivot)
+				i++;
+			while (v[j] > pivot)
+				j--;
+			if (i <= j)
+				swap_d(&v[i++], &v[j--]);
+		}
+		if (k <= j)
+			hi = j;
+		else if (k >= i)
+			lo = i;
+		else
+			break;
+	}
+	return v[k];
+}
+
+static double dist3(const double *a, const double *b)
+{
+	double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+	return mvod_vec3_norm(d);
+}
+
+int mvod_motion_relative_scale(const double *prev, const double *cur, int n, int min_pairs,
+			       double *scratch, double *s)
+{
+	/* Pairs (i, i + n/2): each point used once, partners far apart in detection order. */
+	int half = n / 2, m = 0;
+	for (int i = 0; i < half; i++) {
+		int j = i + half;
+		double dc = dist3(cur + 3 * i, cur + 3 * j);
+		double dp = dist3(prev + 3 * i, prev + 3 * j);
+		if (dc > 1e-9 && dp > 1e-9 && isfinite(dc) && isfinite(dp))
+			scratch[m++] = dp / dc;
+	}
+	if (m < min_pairs || m == 0)
+		return -ENODATA;
+	*s = mvod_median(scratch, m);
+	return 0;
+}
+
+static double det3(const double A[9])
+{
+	return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+	       A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+
+int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t *mask, int n,
+			      double R[9])
+{
+	/* Kabsch: H = sum b1 b2^T, R = V diag(1, 1, det) U^T maps bearings of 1 onto 2. */
+	double H[9] = {0};
+	int used = 0;
+	for (int i = 0; i < n; i++) {
+		if (!mask[i])
+			continue;
+		double b1[3] = {x1[2 * i], x1[2 * i + 1], 1.0}, b2[3] = {x2[2 * i], x2[2 * i + 1], 1.0};
+		double n1 = mvod_vec3_norm(b1), n2 = mvod_vec3_norm(b2);
+		for (int r = 0; r < 3; r++)
+			for (int c = 0; c < 3; c++)
+				H[3 * r + c] += (b1[r] / n1) * (b2[c] / n2);
+		used++;
+	}
+	if (used < 3)
+		return -EINVAL;
+	double U[9], S[3], Vt[9];
+	int ret = mvod_cv_svd3(H, U, S, Vt);
+	if (ret)
+		return ret;
+	/* V = Vt^T, so (V D U^T)[r][c] = sum_k Vt[k][r] D[k] U[c][k]. */
+	double D[3] = {1, 1, 1};
+	for (int pass = 0; pass < 2; pass++) {
+		for (int r = 0; r < 3; r++)
+			for (int c = 0; c < 3; c++)
+				R[3 * r + c] = Vt[r] * D[0] * U[3 * c] + Vt[3 + r] * D[1] * U[3 * c + 1] +
+					       Vt[6 + r] * D[2] * U[3 * c + 2];
+		if (det3(R) > 0)
+			break;
+		D[2] = -1; /* a reflection: flip the weakest axis */
+	}
+	return 0;
+}

@@ -1,2 +1,254 @@
-/* placeholder until the module lands */
-typedef int mvod_placeholder_t;
+#include "mvod/traj.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static const char *const format_names[] = {"tum", "kitti"};
+
+int mvod_traj_format_parse(const char *name, enum mvod_traj_format *out)
+{
+	for (int i = 0; i < 2; i++) {
+		if (strcmp(name, format_names[i]) == 0) {
+			*out = (enum mvod_traj_format)i;
+			return 0;
+		}
+	}
+	return -EINVAL;
+}
+
+const char *mvod_traj_format_name(enum mvod_traj_format fmt)
+{
+	return (unsigned)fmt < 2 ? format_names[fmt] : "unknown";
+}
+
+struct mvod_traj_writer {
+	int fd;
+	int error; /* first failure, reported again at close */
+	enum mvod_traj_format fmt;
+};
+
+int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mvod_traj_writer **out)
+{
+	struct mvod_traj_writer *w = calloc(1, sizeof(*w));
+	if (!w)
+		return -ENOMEM;
+	w->fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+	if (w->fd < 0) {
+		int ret = -errno;
+		free(w);
+		return ret;
+	}
+	w->fmt = fmt;
+	*out = w;
+	return 0;
+}
+
+static int format_line(enum mvod_traj_format fmt, double t, const struct mvod_pose *p, char *buf,
+		       size_t len)
+{
+	if (fmt == MVOD_TRAJ_TUM) {
+		double q[4];
+		mvod_rot_to_quat(p->R, q);
+		return snprintf(buf, len, "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", t, p->t[0],
+				p->t[1], p->t[2], q[1], q[2], q[3], q[0]);
+	}
+	const double *R = p->R;
+	return snprintf(buf, len, "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n",
+			R[0], R[1], R[2], p->t[0], R[3], R[4], R[5], p->t[1], R[6], R[7], R[8], p->t[2]);
+}
+
+int mvod_traj_writer_add(struct mvod_traj_writer *w, double t, const struct mvod_pose *pose)
+{
+	char line[512];
+	int len = format_line(w->fmt, t, pose, line, sizeof(line));
+	if (len < 0 || len >= (int)sizeof(line))
+		return -EOVERFLOW;
+	/* One write(2) per line: a killed process never leaves a partial line behind. */
+	ssize_t n;
+	do
+		n = write(w->fd, line, (size_t)len);
+	while (n < 0 && errno == EINTR);
+	int ret = 0;
+	if (n < 0)
+		ret = -errno;
+	else if (n != len)
+		ret = -ENOSPC;
+	if (ret && !w->error)
+		w->error = ret;
+	if (n > 0 && n != len) {
+		/* A short write on a full disk: cut the partial line so the file stays parseable. */
+		off_t end = lseek(w->fd, -(off_t)n, SEEK_END);
+		if (end >= 0 && ftruncate(w->fd, end) != 0)
+			w->error = -errno;
+	}
+	return ret;
+}
+
+int mvod_traj_writer_close(struct mvod_traj_writer *w)
+{
+	if (!w)
+		return 0;
+	int ret = w->error;
+	if (fsync(w->fd) != 0 && errno != EINVAL && !ret)
+		ret = -errno;
+	if (close(w->fd) != 0 && !ret)
+		ret = -errno;
+	free(w);
+	return ret;
+}
+
+/* Counts whitespace-separated numbers on a line; 0 for blank and '#' comment lines. */
+static int parse_numbers(const char *line, double *v, int max)
+{
+	int n = 0;
+	const char *s = line;
+	while (*s == ' ' || *s == '\t')
+		s++;
+	if (*s == '#' || *s == '\n' || *s == '\r' || *s == '\0')
+		return 0;
+	for (;;) {
+		char *end;
+		double x = strtod(s, &end);
+		if (end == s)
+			break;
+		if (n < max)
+			v[n] = x;
+		n++;
+		s = end;
+	}
+	while (*s == ' ' || *s == '\t' || *s == '\r' || *s == '\n')
+		s++;
+	return *s ? -1 : n;
+}
+
+static void pose_from_numbers(enum mvod_traj_format fmt, const double *v, double *t,
+			      struct mvod_pose *p)
+{
+	if (fmt == MVOD_TRAJ_KITTI) {
+		*t = 0;
+		for (int r = 0; r < 3; r++) {
+			memcpy(p->R + 3 * r, v + 4 * r, 3 * sizeof(double));
+			p->t[r] = v[4 * r + 3];
+		}
+		return;
+	}
+	*t = v[0];
+	memcpy(p->t, v + 1, 3 * sizeof(double));
+	double q[4] = {v[7], v[4], v[5], v[6]};
+	mvod_quat_to_rot(q, p->R);
+}
+
+static int traj_push(struct mvod_traj *tr, int *cap, double t, const struct mvod_pose *p)
+{
+	if (tr->n == *cap) {
+		int ncap = *cap ? 2 * *cap : 1024;
+		double *nt = realloc(tr->t, (size_t)ncap * sizeof(*nt));
+		if (!nt)
+			return -ENOMEM;
+		tr->t = nt;
+		struct mvod_pose *np = realloc(tr->pose, (size_t)ncap * sizeof(*np));
+		if (!np)
+			return -ENOMEM;
+		tr->pose = np;
+		*cap = ncap;
+	}
+	tr->t[tr->n] = t;
+	tr->pose[tr->n] = *p;
+	tr->n++;
+	return 0;
+}
+
+int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen)
+{
+	struct mvod_traj tr = {0};
+	int cap = 0, ret = 0, lineno = 0, cols = 0;
+	char *line = NULL;
+	size_t linecap = 0;
+	FILE *f = fopen(path, "r");
+	if (!f) {
+		ret = -errno;
+		snprintf(err, errlen, "cannot open %s: %s", path, strerror(errno));
+		return ret;
+	}
+	while (getline(&line, &linecap, f) > 0) {
+		double v[12];
+		lineno++;
+		int n = parse_numbers(line, v, 12);
+		if (n == 0)
+			continue;
+		if (cols == 0 && (n == 8 || n == 12)) {
+			cols = n;
+			tr.format = n == 8 ? MVOD_TRAJ_TUM : MVOD_TRAJ_KITTI;
+		}
+		if (n != cols) {
+			snprintf(err, errlen, "%s:%d: expected %d numbers (%s), found %s", path, lineno,
+				 cols ? cols : 12, cols == 8 ? "TUM" : "KITTI 3x4 or TUM",
+				 n < 0 ? "text" : "another count");
+			ret = -EINVAL;
+			goto out;
+		}
+		double t;
+		struct mvod_pose p;
+		pose_from_numbers(tr.format, v, &t, &p);
+		ret = traj_push(&tr, &cap, t, &p);
+		if (ret)
+			goto out;
+	}
+	if (tr.n == 0) {
+		snprintf(err, errlen, "%s: no poses", path);
+		ret = -EINVAL;
+	}
+out:
+	free(line);
+	fclose(f);
+	if (ret)
+		mvod_traj_free(&tr);
+	else
+		*out = tr;
+	return ret;
+}
+
+void mvod_traj_free(struct mvod_traj *traj)
+{
+	free(traj->t);
+	free(traj->pose);
+	traj->t = NULL;
+	traj->pose = NULL;
+	traj->n = 0;
+}
+
+int mvod_path_init(struct mvod_path *p, int cap)
+{
+	*p = (struct mvod_path){.cap = cap < 2 ? 2 : cap, .stride = 1};
+	p->xyz = malloc((size_t)p->cap * 3 * sizeof(double));
+	return p->xyz ? 0 : -ENOMEM;
+}
+
+void mvod_path_add(struct mvod_path *p, const double xyz[3])
+{
+	if (p->seen++ % p->stride != 0)
+		return;
+	if (p->n == p->cap) {
+		/* Keep every second point: the path keeps its shape and its memory. */
+		for (int i = 0; i < p->n / 2; i++)
+			memcpy(p->xyz + 3 * i, p->xyz + 6 * i, 3 * sizeof(double));
+		p->n /= 2;
+		p->stride *= 2;
+		if ((p->seen - 1) % p->stride != 0)
+			return;
+	}
+	memcpy(p->xyz + 3 * p->n, xyz, 3 * sizeof(double));
+	p->n++;
+}
+
+void mvod_path_fini(struct mvod_path *p)
+{
+	free(p->xyz);
+	p->xyz = NULL;
+	p->n = 0;
+}

@@ -1,2 +1,407 @@
-/* placeholder until the module lands */
-typedef int mvod_placeholder_t;
+#include "mvod/vo.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "cv_shim.h"
+#include "match.h"
+#include "motion.h"
+
+const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",
+							 "pose"};
+
+const char *mvod_frame_status_name(enum mvod_frame_status s)
+{
+	static const char *const names[] = {"motion",      "first",        "rotation",
+					    "few-features", "few-matches", "ransac-failed",
+					    "few-inliers"};
+	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
+}
+
+const char *mvod_track_state_name(enum mvod_track_state s)
+{
+	static const char *const names[] = {"STARTING", "INITIALIZING", "TRACKING",
+					    "LOST",     "SOURCE_DOWN",  "STOPPING"};
+	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "UNKNOWN";
+}
+
+const char *mvod_scale_source_name(enum mvod_scale_source s)
+{
+	static const char *const names[] = {"none", "structure", "constant-speed", "ground-truth",
+					    "unit"};
+	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
+}
+
+int mvod_robust_method_parse(const char *name, enum mvod_robust_method *out)
+{
+	if (strcmp(name, "magsac") == 0)
+		*out = MVOD_ROBUST_MAGSAC;
+	else if (strcmp(name, "ransac") == 0)
+		*out = MVOD_ROBUST_RANSAC;
+	else
+		return -EINVAL;
+	return 0;
+}
+
+void mvod_vo_params_default(struct mvod_vo_params *p)
+{
+	*p = (struct mvod_vo_params){
+		.resize = 1.0,
+		.blur_ksize = 0,
+		.max_features = 2000,
+		.ratio = 0.8,
+		.cross_check = true,
+		.robust = MVOD_ROBUST_MAGSAC,
+		.ransac_px = 1.0,
+		.ransac_conf = 0.999,
+		.min_matches = 30,
+		.min_inliers = 20,
+		.min_parallax_px = 1.0,
+		.scale_mode = MVOD_SCALE_MODE_AUTO,
+	};
+}
+
+/* One frame's features and, for the reference frame, the structure seen from it. */
+struct keyframe {
+	struct mvod_features f;
+	double *pts; /* cap * 3: point in this camera's frame, absolute units */
+	uint8_t *has_pt;
+	struct mvod_pose pose; /* camera-to-world */
+	double gt[3];
+	int have_gt;
+};
+
+struct mvod_vo {
+	struct mvod_vo_params p;
+	struct mvod_camera cam; /* after preprocessing: pinhole, no distortion */
+	struct mvod_cv_preproc *pre;
+	struct mvod_cv_orb *orb;
+	struct mvod_matcher *matcher;
+	int cap;
+	struct keyframe kf[2];
+	struct keyframe *ref, *cur;
+	int have_ref;
+	struct mvod_match *matches;
+	double *x1, *x2, *depth, *prev_pts, *cur_pts, *scratch;
+	uint8_t *mask;
+	struct mvod_pose pose; /* last published pose */
+	enum mvod_track_state state;
+	double last_step;   /* length of the last translation step, for constant speed */
+	int have_step;
+};
+
+static double now_ms(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
+static int keyframe_init(struct keyframe *k, int cap)
+{
+	k->f.cap = cap;
+	k->f.kp = calloc((size_t)cap, sizeof(*k->f.kp));
+	k->f.desc = calloc((size_t)cap, MVOD_ORB_DESC_BYTES);
+	k->pts = calloc((size_t)cap * 3, sizeof(double));
+	k->has_pt = calloc((size_t)cap, 1);
+	return k->f.kp && k->f.desc && k->pts && k->has_pt ? 0 : -ENOMEM;
+}
+
+static void keyframe_fini(struct keyframe *k)
+{
+	free(k->f.kp);
+	free(k->f.desc);
+	free(k->pts);
+	free(k->has_pt);
+}
+
+static int alloc_buffers(struct mvod_vo *vo)
+{
+	size_t n = (size_t)vo->cap;
+	vo->matches = calloc(n, sizeof(*vo->matches));
+	vo->x1 = calloc(n * 2, sizeof(double));
+	vo->x2 = calloc(n * 2, sizeof(double));
+	vo->depth = calloc(n, sizeof(double));
+	vo->prev_pts = calloc(n * 3, sizeof(double));
+	vo->cur_pts = calloc(n * 3, sizeof(double));
+	vo->scratch = calloc(n, sizeof(double));
+	vo->mask = calloc(n, 1);
+	if (!vo->matches || !vo->x1 || !vo->x2 || !vo->depth || !vo->prev_pts || !vo->cur_pts ||
+	    !vo->scratch || !vo->mask)
+		return -ENOMEM;
+	for (int i = 0; i < 2; i++)
+		if (keyframe_init(&vo->kf[i], vo->cap))
+			return -ENOMEM;
+	return 0;
+}
+
+int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,
+		   struct mvod_vo **out)
+{
+	struct mvod_vo *vo = calloc(1, sizeof(*vo));
+	if (!vo)
+		return -ENOMEM;
+	vo->p = *params;
+	/* ORB may return a few more than asked for; the cap leaves room for them. */
+	vo->cap = params->max_features + params->max_features / 4 + 16;
+	int ret = mvod_cv_preproc_create(cam, params->resize, params->blur_ksize, &vo->cam, &vo->pre);
+	if (ret)
+		goto fail;
+	ret = mvod_cv_orb_create(params->max_features, vo->cam.width, vo->cam.height, &vo->orb);
+	if (ret)
+		goto fail;
+	ret = mvod_matcher_create(vo->cap, &vo->matcher);
+	if (ret)
+		goto fail;
+	ret = alloc_buffers(vo);
+	if (ret)
+		goto fail;
+	vo->ref = &vo->kf[0];
+	vo->cur = &vo->kf[1];
+	mvod_pose_identity(&vo->pose);
+	vo->state = MVOD_STATE_INITIALIZING;
+	*out = vo;
+	return 0;
+fail:
+	mvod_vo_destroy(vo);
+	return ret;
+}
+
+void mvod_vo_destroy(struct mvod_vo *vo)
+{
+	if (!vo)
+		return;
+	mvod_cv_preproc_destroy(vo->pre);
+	mvod_cv_orb_destroy(vo->orb);
+	mvod_matcher_destroy(vo->matcher);
+	for (int i = 0; i < 2; i++)
+		keyframe_fini(&vo->kf[i]);
+	free(vo->matches);
+	free(vo->x1);
+	free(vo->x2);
+	free(vo->depth);
+	free(vo->prev_pts);
+	free(vo->cur_pts);
+	free(vo->scratch);
+	free(vo->mask);
+	free(vo);
+}
+
+void mvod_vo_camera(const struct mvod_vo *vo, struct mvod_camera *cam)
+{
+	*cam = vo->cam;
+}
+
+/* The current frame becomes the reference; its structure is what the next step scales against. */
+static void promote(struct mvod_vo *vo, const double *gt)
+{
+	struct keyframe *k = vo->ref;
+	vo->ref = vo->cur;
+	vo->cur = k;
+	vo->ref->pose = vo->pose;
+	vo->ref->have_gt = gt != NULL;
+	if (gt)
+		memcpy(vo->ref->gt, gt, sizeof(vo->ref->gt));
+	vo->have_ref = 1;
+}
+
+static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k, double *x)
+{
+	x[0] = (k->x - c->cx) / c->fx;
+	x[1] = (k->y - c->cy) / c->fy;
+}
+
+/* Median pixel distance between where rotation alone would put each inlier and where it is. */
+static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
+{
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		if (!vo->mask[i])
+			continue;
+		double r[3] = {vo->x1[2 * i], vo->x1[2 * i + 1], 1.0}, p[3];
+		mvod_mat3_vec(R, r, p);
+		if (p[2] <= 1e-9)
+			continue;
+		double du = (p[0] / p[2] - vo->x2[2 * i]) * vo->cam.fx;
+		double dv = (p[1] / p[2] - vo->x2[2 * i + 1]) * vo->cam.fy;
+		vo->scratch[m++] = sqrt(du * du + dv * dv);
+	}
+	return m ? mvod_median(vo->scratch, m) : 0.0;
+}
+
+/*
+ * Step length from the structure both steps share: points the reference saw from its own
+ * previous step (absolute units) against the same points from this step (unit baseline).
+ */
+static int structure_scale(struct mvod_vo *vo, int n, double *s)
+{
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		int a = vo->matches[i].a;
+		if (!vo->mask[i] || vo->depth[i] <= 0 || !vo->ref->has_pt[a])
+			continue;
+		memcpy(vo->prev_pts + 3 * m, vo->ref->pts + 3 * a, 3 * sizeof(double));
+		double *c = vo->cur_pts + 3 * m;
+		c[0] = vo->x1[2 * i] * vo->depth[i];
+		c[1] = vo->x1[2 * i + 1] * vo->depth[i];
+		c[2] = vo->depth[i];
+		m++;
+	}
+	return mvod_motion_relative_scale(vo->prev_pts, vo->cur_pts, m, 10, vo->scratch, s);
+}
+
+static double step_length(struct mvod_vo *vo, int n, const double *gt,
+			  enum mvod_scale_source *src)
+{
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT) {
+		double d[3] = {gt[0] - vo->ref->gt[0], gt[1] - vo->ref->gt[1], gt[2] - vo->ref->gt[2]};
+		*src = MVOD_SCALE_GROUND_TRUTH;
+		return mvod_vec3_norm(d);
+	}
+	double s;
+	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {
+		*src = MVOD_SCALE_STRUCTURE;
+		return s;
+	}
+	*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
+	return vo->have_step ? vo->last_step : 1.0;
+}
+
+/* Structure of this step in the new reference's frame (X2 = R X1 + t s), for the next scale. */
+static void store_structure(struct mvod_vo *vo, const double R[9], const double t[3], double s,
+			    int n)
+{
+	memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+	for (int i = 0; i < n; i++) {
+		if (!vo->mask[i] || vo->depth[i] <= 0)
+			continue;
+		double X1[3] = {vo->x1[2 * i] * vo->depth[i] * s, vo->x1[2 * i + 1] * vo->depth[i] * s,
+				vo->depth[i] * s};
+		double *X2 = vo->cur->pts + 3 * vo->matches[i].b;
+		mvod_mat3_vec(R, X1, X2);
+		for (int k = 0; k < 3; k++)
+			X2[k] += t[k] * s;
+		vo->cur->has_pt[vo->matches[i].b] = 1;
+	}
+}
+
+/* pose = ref_pose * inverse([R | t s]) for the motion X_cur = R X_ref + t s. */
+static void apply_motion(struct mvod_vo *vo, const double R[9], const double t[3], double s)
+{
+	struct mvod_pose rel = {0}, inv;
+	memcpy(rel.R, R, sizeof(rel.R));
+	for (int k = 0; k < 3; k++)
+		rel.t[k] = t[k] * s;
+	mvod_pose_inverse(&rel, &inv);
+	mvod_pose_compose(&vo->ref->pose, &inv, &vo->pose);
+}
+
+static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
+				       struct mvod_vo_result *res)
+{
+	int n = res->matches;
+	for (int i = 0; i < n; i++) {
+		normalise(&vo->cam, &vo->ref->f.kp[vo->matches[i].a], vo->x1 + 2 * i);
+		normalise(&vo->cam, &vo->cur->f.kp[vo->matches[i].b], vo->x2 + 2 * i);
+	}
+	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
+	double E[9], R1[9], R2[9], tu[3], R[9], t[3];
+	int inl = 0;
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	bool magsac = vo->p.robust == MVOD_ROBUST_MAGSAC;
+	if (mvod_cv_find_essential(vo->x1, vo->x2, n, magsac, vo->p.ransac_px / f, vo->p.ransac_conf,
+				   E, vo->mask, &inl) != 0 ||
+	    inl < vo->p.min_inliers || mvod_cv_decompose_essential(E, R1, R2, tu) != 0)
+		return MVOD_FRAME_RANSAC_FAILED;
+	res->inliers = mvod_motion_cheirality(R1, R2, tu, vo->x1, vo->x2, vo->mask, n, R, t, vo->depth);
+	if (res->inliers < vo->p.min_inliers)
+		return MVOD_FRAME_FEW_INLIERS;
+	if (rotation_free_parallax(vo, R, n) < vo->p.min_parallax_px) {
+		mvod_motion_rotation_only(vo->x1, vo->x2, vo->mask, n, R);
+		apply_motion(vo, R, t, 0.0);
+		res->scale_source = MVOD_SCALE_NONE;
+		return MVOD_FRAME_ROTATION;
+	}
+	double s = step_length(vo, n, gt, &res->scale_source);
+	apply_motion(vo, R, t, s);
+	store_structure(vo, R, t, s, n);
+	res->step_m = s;
+	vo->last_step = s;
+	vo->have_step = 1;
+	return MVOD_FRAME_MOTION;
+}
+
+/* After a frame: move state, and decide whether it becomes the new reference. */
+static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
+{
+	enum mvod_frame_status st = res->status;
+	if (st == MVOD_FRAME_MOTION) {
+		vo->state = MVOD_STATE_TRACKING;
+		promote(vo, gt);
+	} else if (st == MVOD_FRAME_ROTATION) {
+		/* Keep the reference while it still overlaps well, so parallax can build up. */
+		if (res->matches < 2 * vo->p.min_matches) {
+			memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+			promote(vo, gt);
+		}
+	} else if (st != MVOD_FRAME_FEW_FEATURES) {
+		/* Not trackable against the reference, but rich enough to start again from. */
+		if (vo->state == MVOD_STATE_TRACKING)
+			vo->state = MVOD_STATE_LOST;
+		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+		promote(vo, gt);
+	} else if (vo->state == MVOD_STATE_TRACKING) {
+		vo->state = MVOD_STATE_LOST;
+	}
+}
+
+int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
+		    struct mvod_vo_result *res)
+{
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT && !gt_position)
+		return -EINVAL;
+	memset(res, 0, sizeof(*res));
+	double t0 = now_ms();
+	struct mvod_image grey;
+	int ret = mvod_cv_preproc_run(vo->pre, img, &grey);
+	if (ret)
+		return ret;
+	double t1 = now_ms();
+	ret = mvod_cv_orb_detect(vo->orb, &grey, &vo->cur->f);
+	if (ret)
+		return ret;
+	double t2 = now_ms();
+	res->features = vo->cur->f.n;
+	if (!vo->have_ref) {
+		res->status = vo->cur->f.n >= vo->p.min_matches ? MVOD_FRAME_FIRST
+								 : MVOD_FRAME_FEW_FEATURES;
+	} else if (vo->cur->f.n < vo->p.min_matches) {
+		res->status = MVOD_FRAME_FEW_FEATURES;
+	} else {
+		ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->p.ratio,
+				    vo->p.cross_check, vo->matches, vo->cap, &res->matches);
+		if (ret)
+			return ret;
+		res->status = MVOD_FRAME_FEW_MATCHES;
+	}
+	double t3 = now_ms();
+	if (res->status == MVOD_FRAME_FEW_MATCHES && res->matches >= vo->p.min_matches)
+		res->status = estimate(vo, gt_position, res);
+	if (res->status == MVOD_FRAME_FIRST) {
+		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+		promote(vo, gt_position);
+	} else {
+		settle(vo, gt_position, res);
+	}
+	double t4 = now_ms();
+	res->pose = vo->pose;
+	res->state = vo->state;
+	res->ms[MVOD_STAGE_PREPROCESS] = t1 - t0;
+	res->ms[MVOD_STAGE_DETECT] = t2 - t1;
+	res->ms[MVOD_STAGE_MATCH] = t3 - t2;
+	res->ms[MVOD_STAGE_POSE] = t4 - t3;
+	return 0;
+}

@@ -1,0 +1,75 @@
+# Thin wrapper around meson: the two commands a new user runs are `make demo` and `make test`.
+BUILDDIR ?= build
+ASANDIR  ?= build-asan
+DEMODIR  ?= demo-out
+PREFIX   ?= /usr/local
+DESTDIR  ?=
+
+# Exactly what the build, the tests and the demo need from Debian 12.
+DEBS := gcc g++ make pkg-config meson ninja-build \
+	libopencv-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev libcmocka-dev
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: all deps build test test-asan demo bench install clean
+
+all: build
+
+deps:
+	@missing=""; \
+	for p in $(DEBS); do \
+		dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || \
+			missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+		echo "make deps: installing$$missing"; \
+		$(SUDO) apt-get update -qq && \
+		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+			--no-install-recommends $$missing; \
+	fi
+
+$(BUILDDIR)/build.ninja:
+	meson setup $(BUILDDIR) --prefix=$(PREFIX)
+
+$(ASANDIR)/build.ninja:
+	meson setup $(ASANDIR) -Dbuildtype=debugoptimized -Db_sanitize=address,undefined \
+		-Db_lundef=false
+
+build: deps $(BUILDDIR)/build.ninja
+	meson compile -C $(BUILDDIR)
+
+# Every suite (unit, integration, data), then the unit and integration suites again under
+# AddressSanitizer and UndefinedBehaviorSanitizer.
+test: build
+	meson test -C $(BUILDDIR) --print-errorlogs
+	$(MAKE) --no-print-directory test-asan
+
+test-asan: deps $(ASANDIR)/build.ninja
+	meson compile -C $(ASANDIR)
+	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
+		meson test -C $(ASANDIR) --suite unit --suite integration --print-errorlogs
+
+demo: build
+	@rm -rf $(DEMODIR) && mkdir -p $(DEMODIR)
+	$(BUILDDIR)/tools/mvod-synth --path figure8 --frames 300 --out $(DEMODIR)/synth
+	$(BUILDDIR)/mvod --source file:$(DEMODIR)/synth/video.mkv --calib $(DEMODIR)/synth/calib.json \
+		--gt $(DEMODIR)/synth/gt.tum --trajectory $(DEMODIR)/trajectory.tum \
+		--plot $(DEMODIR)/trajectory.png \
+		--lcm-url 'file://$(abspath $(DEMODIR))/mvod.lcmlog?mode=w'
+	@echo
+	@echo "demo: trajectory  $(DEMODIR)/trajectory.tum (TUM: t x y z qx qy qz qw)"
+	@echo "demo: plot        $(DEMODIR)/trajectory.png"
+	@echo "demo: LCM log     $(DEMODIR)/mvod.lcmlog (mvod.pose_t on MVOD_POSE, mvod.status_t on MVOD_STATUS)"
+	@echo "demo: input       $(DEMODIR)/synth/ (video.mkv, calib.json, gt.tum, gt.kitti)"
+
+bench: build
+	bench/run.sh $(BUILDDIR)
+
+install: build
+	meson configure $(BUILDDIR) --prefix=$(PREFIX)
+	meson compile -C $(BUILDDIR)
+	DESTDIR=$(DESTDIR) meson install -C $(BUILDDIR) --no-rebuild
+
+clean:
+	rm -rf $(BUILDDIR) $(ASANDIR) $(DEMODIR)

@@ -1,0 +1,52 @@
+/*
+ * Two-view geometry in plain C: cheirality among the essential-matrix decompositions,
+ * midpoint triangulation, relative scale from structure, and rotation-only fits.
+ * Points are normalised image coordinates (x, y) with z = 1; motion is X2 = R X1 + t.
+ */
+#ifndef MVOD_MOTION_H
+#define MVOD_MOTION_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+/* Points farther than this many baselines are too close to infinity to vote (as recoverPose). */
+#define MVOD_MOTION_MAX_DEPTH 50.0
+
+/*
+ * Depths of one correspondence along its two rays: d1 in camera 1, d2 in camera 2, from the
+ * midpoint of the closest approach of the rays. False when the rays are parallel.
+ */
+bool mvod_triangulate_midpoint(const double R[9], const double t[3], const double x1[2],
+			       const double x2[2], double *d1, double *d2);
+
+/*
+ * Resolves the fourfold ambiguity of an essential matrix: for each of (R1, t), (R1, -t),
+ * (R2, t), (R2, -t), triangulates the points with mask[i] set, and keeps the candidate with
+ * the most points in front of both cameras (0 < d <= MAX_DEPTH). Writes R, t, and for each
+ * point depth1[i] (> 0 in front, 0 otherwise; may be NULL). Returns the number in front.
+ */
+int mvod_motion_cheirality(const double R1[9], const double R2[9], const double t[3],
+			   const double *x1, const double *x2, const uint8_t *mask, int n,
+			   double R[9], double t_out[3], double *depth1);
+
+/*
+ * Relative scale s of the current unit-baseline structure against the previous structure:
+ * prev[i] and cur[i] are the same n points in the same camera frame (previous in absolute
+ * units, current with |t| = 1). s = median over disjoint point pairs of
+ * |prev_i - prev_j| / |cur_i - cur_j|. scratch holds n / 2 doubles. Returns -ENODATA when
+ * fewer than min_pairs pairs are usable.
+ */
+int mvod_motion_relative_scale(const double *prev, const double *cur, int n, int min_pairs,
+			       double *scratch, double *s);
+
+/* Median of v[0..n) (reorders v); n > 0. */
+double mvod_median(double *v, int n);
+
+/*
+ * Best rotation with x2 ~ R x1 for the points with mask set (Kabsch on unit bearings), for
+ * frames with no measurable translation. Returns -EINVAL for fewer than 3 points.
+ */
+int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t *mask, int n,
+			      double R[9]);
+
+#endif

@@ -1,0 +1,156 @@
+#include "harness.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+static char tmpdir[64];
+
+const char *harness_bin(const char *env)
+{
+	const char *p = getenv(env);
+	if (!p)
+		fail_msg("%s is not set: run the tests through meson test", env);
+	return p;
+}
+
+const char *harness_tmpdir(void)
+{
+	if (!tmpdir[0]) {
+		strcpy(tmpdir, "/tmp/mvod-itest-XXXXXX");
+		if (!mkdtemp(tmpdir))
+			fail_msg("mkdtemp: %s", strerror(errno));
+	}
+	return tmpdir;
+}
+
+void harness_cleanup(void)
+{
+	if (!tmpdir[0])
+		return;
+	char cmd[128];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", tmpdir);
+	if (system(cmd) != 0)
+		fprintf(stderr, "could not remove %s\n", tmpdir);
+	tmpdir[0] = '\0';
+}
+
+/* Drains both pipes until the child closes them, so neither can fill up and block it. */
+static void drain(int fo, int fe, struct run_result *r)
+{
+	size_t no = 0, ne = 0;
+	struct pollfd p[2] = {{.fd = fo, .events = POLLIN}, {.fd = fe, .events = POLLIN}};
+	int open_fds = 2;
+	while (open_fds) {
+		if (poll(p, 2, -1) < 0 && errno != EINTR)
+			break;
+		for (int i = 0; i < 2; i++) {
+			if (p[i].fd < 0 || !(p[i].revents & (POLLIN | POLLHUP)))
+				continue;
+			char *buf = i ? r->err : r->out;
+			size_t *n = i ? &ne : &no;
+			char sink[4096];
+			size_t room = sizeof(r->out) - 1 - *n;
+			ssize_t k = read(p[i].fd, room ? buf + *n : sink, room ? room : sizeof(sink));
+			if (k <= 0) {
+				close(p[i].fd);
+				p[i].fd = -1;
+				open_fds--;
+			} else if (room) {
+				*n += (size_t)k;
+			}
+		}
+	}
+	r->out[no] = '\0';
+	r->err[ne] = '\0';
+}
+
+int harness_run(char *const argv[], struct run_result *r)
+{
+	int po[2], pe[2];
+	memset(r, 0, sizeof(*r));
+	if (pipe(po) || pipe(pe))
+		return -errno;
+	pid_t pid = fork();
+	if (pid < 0)
+		return -errno;
+	if (pid == 0) {
+		dup2(po[1], 1);
+		dup2(pe[1], 2);
+		close(po[0]);
+		close(pe[0]);
+		execv(argv[0], argv);
+		_exit(127);
+	}
+	close(po[1]);
+	close(pe[1]);
+	drain(po[0], pe[0], r);
+	int st;
+	while (waitpid(pid, &st, 0) < 0)
+		if (errno != EINTR)
+			return -errno;
+	r->exited = WIFEXITED(st);
+	r->status = r->exited ? WEXITSTATUS(st) : WTERMSIG(st);
+	return 0;
+}
+
+void harness_synth(const char *dir, const char *path_name, int frames, const char *format)
+{
+	char nframes[16];
+	snprintf(nframes, sizeof(nframes), "%d", frames);
+	char *argv[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", (char *)dir, "--path",
+			(char *)path_name, "--frames", nframes, "--format", (char *)format, NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status != 0)
+		fail_msg("mvod-synth %s failed (%d): %s", path_name, r.status, r.err);
+}
+
+void harness_compare(const char *est_path, const char *gt_path, int sim3, struct traj_errors *e)
+{
+	struct mvod_traj est, gt;
+	char err[512];
+	memset(e, 0, sizeof(*e));
+	if (mvod_traj_load(est_path, &est, err, sizeof(err)))
+		fail_msg("%s", err);
+	if (mvod_traj_load(gt_path, &gt, err, sizeof(err)))
+		fail_msg("%s", err);
+	assert_int_equal(est.n, gt.n);
+	e->n = est.n;
+	double *pe = calloc((size_t)est.n * 3, sizeof(double));
+	double *pg = calloc((size_t)est.n * 3, sizeof(double));
+	assert_non_null(pe);
+	assert_non_null(pg);
+	for (int i = 0; i < est.n; i++) {
+		memcpy(pe + 3 * i, est.pose[i].t, sizeof(est.pose[i].t));
+		memcpy(pg + 3 * i, gt.pose[i].t, sizeof(gt.pose[i].t));
+		double tn = mvod_vec3_norm(est.pose[i].t);
+		if (tn > e->max_translation)
+			e->max_translation = tn;
+		if (i > 0) {
+			mvod_rpe_add(&e->rpe, &est.pose[i - 1], &est.pose[i], &gt.pose[i - 1], &gt.pose[i]);
+			double d[3] = {pg[3 * i] - pg[3 * i - 3], pg[3 * i + 1] - pg[3 * i - 2],
+				       pg[3 * i + 2] - pg[3 * i - 1]};
+			e->length_m += mvod_vec3_norm(d);
+		}
+	}
+	mvod_rpe_finish(&e->rpe);
+	double R[9], t[3];
+	if (mvod_umeyama(pe, pg, est.n, sim3, R, t, &e->scale) == 0)
+		e->ate_m = mvod_ate_rmse(pe, pg, est.n, R, t, e->scale);
+	else
+		e->ate_m = -1;
+	free(pe);
+	free(pg);
+	mvod_traj_free(&est);
+	mvod_traj_free(&gt);
+}

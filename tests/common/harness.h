@@ -1,0 +1,41 @@
+/* Shared by the integration and data tests: run the real binaries, make temp dirs, compare. */
+#ifndef MVOD_TEST_HARNESS_H
+#define MVOD_TEST_HARNESS_H
+
+#include <stddef.h>
+
+#include "mvod/eval.h"
+#include "mvod/traj.h"
+
+/* Exit code meson reads as "skipped". */
+#define EXIT_SKIP 77
+
+struct run_result {
+	int exited;   /* 1 when the process exited (not killed by a signal) */
+	int status;   /* exit status, or the signal number */
+	char out[16384];
+	char err[16384];
+};
+
+/* Runs argv (NULL-terminated) and captures stdout and stderr. Returns 0 or -errno. */
+int harness_run(char *const argv[], struct run_result *r);
+/* Path of a binary from the environment (MVOD, MVOD_SYNTH), failing the test if unset. */
+const char *harness_bin(const char *env);
+/* A fresh temporary directory, removed by harness_cleanup(). */
+const char *harness_tmpdir(void);
+void harness_cleanup(void);
+/* Renders a sequence with mvod-synth into dir; extra args NULL-terminated. Asserts success. */
+void harness_synth(const char *dir, const char *path_name, int frames, const char *format);
+
+/* Errors of an estimated trajectory against ground truth, frame by frame (same count). */
+struct traj_errors {
+	int n;
+	struct mvod_rpe rpe;
+	double ate_m;     /* after alignment */
+	double scale;     /* similarity scale of the alignment (1 for SE(3)) */
+	double length_m;  /* ground-truth path length */
+	double max_translation; /* largest |t| of the estimate (drift of a static camera) */
+};
+void harness_compare(const char *est_path, const char *gt_path, int sim3, struct traj_errors *e);
+
+#endif

@@ -1,0 +1,82 @@
+/*
+ * The real KITTI 06 and 07 clips in ../shared/data, ground-truth scale. Skips (77) when the
+ * data is absent. The bounds are regression bounds: the values measured when they were set
+ * (in the comments) plus a margin for platform differences in OpenCV's RANSAC.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+
+struct clip {
+	const char *seq;
+	int frames;
+	double rot_mean, rot_max, dir_mean; /* bounds, degrees */
+};
+
+static void run_clip(const struct clip *c)
+{
+	const char *data = getenv("MVOD_DATA");
+	char seqdir[512], src[600], gt[600], out[600];
+	snprintf(seqdir, sizeof(seqdir), "%s/kitti-odometry-%s-clip/sequences/%s", data, c->seq, c->seq);
+	snprintf(src, sizeof(src), "kitti:%s", seqdir);
+	snprintf(gt, sizeof(gt), "%s/kitti-odometry-%s-clip/poses/%s.txt", data, c->seq, c->seq);
+	snprintf(out, sizeof(out), "%s/%s.kitti", harness_tmpdir(), c->seq);
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--gt", gt, "--scale", "gt",
+			"--trajectory", out, "--format", "kitti", "--no-lcm", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status)
+		fail_msg("mvod failed (%d): %s", r.status, r.err);
+	struct traj_errors e;
+	harness_compare(out, gt, 0, &e);
+	print_message("KITTI %s: %d frames, rot %.4f deg/frame (max %.4f), dir %.3f deg (max %.3f), "
+		      "ATE %.3f m over %.1f m\n%s",
+		      c->seq, e.n, e.rpe.rot_deg_mean, e.rpe.rot_deg_max, e.rpe.dir_deg_mean,
+		      e.rpe.dir_deg_max, e.ate_m, e.length_m, r.out);
+	assert_int_equal(e.n, c->frames);
+	assert_true(e.rpe.rot_deg_mean < c->rot_mean);
+	assert_true(e.rpe.rot_deg_max < c->rot_max);
+	assert_true(e.rpe.dir_deg_mean < c->dir_mean);
+}
+
+static void test_kitti_06(void **state)
+{
+	(void)state;
+	run_clip(&(struct clip){"06", 51, 1, 10, 90});
+}
+
+static void test_kitti_07(void **state)
+{
+	(void)state;
+	run_clip(&(struct clip){"07", 160, 1, 10, 90});
+}
+
+static int teardown(void **state)
+{
+	(void)state;
+	harness_cleanup();
+	return 0;
+}
+
+int main(void)
+{
+	const char *data = getenv("MVOD_DATA");
+	struct stat st;
+	if (!data || stat(data, &st) != 0) {
+		printf("../shared/data is absent: skipping the KITTI tests\n");
+		return EXIT_SKIP;
+	}
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_kitti_06),
+		cmocka_unit_test(test_kitti_07),
+	};
+	return cmocka_run_group_tests(tests, NULL, teardown);
+}

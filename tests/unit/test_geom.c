@@ -1,0 +1,102 @@
+/* Quaternion and rotation conversions, pose algebra. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+
+#include <cmocka.h>
+
+#include "mvod/geom.h"
+
+static void assert_mat_near(const double *a, const double *b, int n, double tol)
+{
+	for (int i = 0; i < n; i++)
+		assert_true(fabs(a[i] - b[i]) <= tol);
+}
+
+static void test_quat_round_trip(void **state)
+{
+	(void)state;
+	/* Angles up to and past 180 deg, so every branch of Shepperd's method runs. */
+	const double axes[][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 2, 3}, {-2, 0.5, 1}};
+	const double angles[] = {0, 1e-6, 0.3, 1.5, 3.0, M_PI - 1e-9, M_PI};
+	for (size_t a = 0; a < 5; a++) {
+		for (size_t k = 0; k < 7; k++) {
+			double n = sqrt(axes[a][0] * axes[a][0] + axes[a][1] * axes[a][1] +
+					axes[a][2] * axes[a][2]);
+			double w[3] = {axes[a][0] / n * angles[k], axes[a][1] / n * angles[k],
+				       axes[a][2] / n * angles[k]};
+			double R[9], q[4], R2[9];
+			mvod_rot_exp(w, R);
+			mvod_rot_to_quat(R, q);
+			assert_true(q[0] >= 0);
+			assert_true(fabs(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3] - 1) < 1e-12);
+			mvod_quat_to_rot(q, R2);
+			assert_mat_near(R, R2, 9, 1e-9);
+			assert_true(fabs(mvod_rot_angle(R) - angles[k]) < 1e-7);
+		}
+	}
+}
+
+static void test_quat_known_value(void **state)
+{
+	(void)state;
+	/* 90 deg about z: q = (cos 45, 0, 0, sin 45); x maps to y. */
+	double w[3] = {0, 0, M_PI / 2}, R[9], q[4];
+	mvod_rot_exp(w, R);
+	mvod_rot_to_quat(R, q);
+	assert_true(fabs(q[0] - M_SQRT1_2) < 1e-12 && fabs(q[3] - M_SQRT1_2) < 1e-12);
+	double x[3] = {1, 0, 0}, y[3];
+	mvod_mat3_vec(R, x, y);
+	assert_true(fabs(y[0]) < 1e-12 && fabs(y[1] - 1) < 1e-12);
+}
+
+static void test_pose_inverse_compose(void **state)
+{
+	(void)state;
+	struct mvod_pose a, ai, id;
+	double w[3] = {0.1, -0.4, 0.25};
+	mvod_rot_exp(w, a.R);
+	a.t[0] = 1;
+	a.t[1] = -2;
+	a.t[2] = 3.5;
+	mvod_pose_inverse(&a, &ai);
+	mvod_pose_compose(&a, &ai, &id);
+	struct mvod_pose I;
+	mvod_pose_identity(&I);
+	assert_mat_near(id.R, I.R, 9, 1e-12);
+	assert_mat_near(id.t, I.t, 3, 1e-12);
+	/* Composition applies b first: a * b maps p to a(b(p)). */
+	struct mvod_pose b = a, ab;
+	mvod_pose_compose(&a, &b, &ab);
+	double p[3] = {0.3, 0.2, -1}, bp[3], abp[3], ref[3];
+	mvod_mat3_vec(b.R, p, bp);
+	for (int k = 0; k < 3; k++)
+		bp[k] += b.t[k];
+	mvod_mat3_vec(a.R, bp, ref);
+	for (int k = 0; k < 3; k++)
+		ref[k] += a.t[k];
+	mvod_mat3_vec(ab.R, p, abp);
+	for (int k = 0; k < 3; k++)
+		abp[k] += ab.t[k];
+	assert_mat_near(abp, ref, 3, 1e-12);
+}
+
+static void test_vec_angle(void **state)
+{
+	(void)state;
+	double a[3] = {1, 0, 0}, b[3] = {1, 1, 0}, z[3] = {0, 0, 0};
+	assert_true(fabs(mvod_vec3_angle(a, b) - M_PI / 4) < 1e-12);
+	assert_true(mvod_vec3_angle(a, z) == 0.0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_quat_round_trip),
+		cmocka_unit_test(test_quat_known_value),
+		cmocka_unit_test(test_pose_inverse_compose),
+		cmocka_unit_test(test_vec_angle),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

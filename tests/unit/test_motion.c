@@ -1,0 +1,170 @@
+/* Essential matrix, its decomposition, cheirality and relative scale on exact synthetic data. */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "mvod/geom.h"
+#include "vo/cv_shim.h"
+#include "vo/motion.h"
+
+#define N 200
+
+/* Deterministic points in front of camera 1, seen by camera 2 at X2 = R X1 + t. */
+static void scene(const double R[9], const double t[3], double *X, double *x1, double *x2)
+{
+	unsigned s = 12345;
+	for (int i = 0; i < N; i++) {
+		double *P = X + 3 * i;
+		s = s * 1103515245u + 12345u;
+		P[0] = ((s >> 8) % 2000) / 100.0 - 10;
+		s = s * 1103515245u + 12345u;
+		P[1] = ((s >> 8) % 1000) / 100.0 - 5;
+		s = s * 1103515245u + 12345u;
+		P[2] = 5 + ((s >> 8) % 2500) / 100.0;
+		double Q[3];
+		mvod_mat3_vec(R, P, Q);
+		for (int k = 0; k < 3; k++)
+			Q[k] += t[k];
+		x1[2 * i] = P[0] / P[2];
+		x1[2 * i + 1] = P[1] / P[2];
+		x2[2 * i] = Q[0] / Q[2];
+		x2[2 * i + 1] = Q[1] / Q[2];
+	}
+}
+
+static void motion(double R[9], double t[3])
+{
+	double w[3] = {0.02, -0.15, 0.01};
+	mvod_rot_exp(w, R);
+	t[0] = 0.2;
+	t[1] = -0.05;
+	t[2] = -0.97;
+	double n = mvod_vec3_norm(t);
+	for (int k = 0; k < 3; k++)
+		t[k] /= n;
+}
+
+static void test_decompose_and_cheirality(void **state)
+{
+	(void)state;
+	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
+	motion(R, t);
+	scene(R, t, X, x1, x2);
+	/* E = [t]x R exactly; the decomposition loses the sign of t and the twisted pair. */
+	double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0}, E[9];
+	mvod_mat3_mul(tx, R, E);
+	double R1[9], R2[9], tu[3], Rb[9], tb[3], depth[N];
+	assert_int_equal(mvod_cv_decompose_essential(E, R1, R2, tu), 0);
+	uint8_t mask[N];
+	memset(mask, 1, sizeof(mask));
+	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, depth);
+	assert_int_equal(front, N);
+	for (int k = 0; k < 9; k++)
+		assert_true(fabs(Rb[k] - R[k]) < 1e-9);
+	for (int k = 0; k < 3; k++)
+		assert_true(fabs(tb[k] - t[k]) < 1e-9);
+	/* Depths along ray 1 are the true z with |t| = 1. */
+	for (int i = 0; i < N; i++)
+		assert_true(fabs(depth[i] - X[3 * i + 2]) < 1e-6 * X[3 * i + 2]);
+}
+
+static void test_ransac_with_outliers(void **state)
+{
+	(void)state;
+	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
+	motion(R, t);
+	scene(R, t, X, x1, x2);
+	/* Every fifth correspondence is garbage. */
+	for (int i = 0; i < N; i += 5) {
+		x2[2 * i] += 0.05 * ((i % 3) - 1) + 0.03;
+		x2[2 * i + 1] -= 0.04;
+	}
+	double E[9], R1[9], R2[9], tu[3], Rb[9], tb[3];
+	uint8_t mask[N];
+	int inl = 0;
+	/* Normalised coordinates, 1 px at f = 500. */
+	assert_int_equal(mvod_cv_find_essential(x1, x2, N, false, 1.0 / 500, 0.999, E, mask, &inl), 0);
+	assert_int_equal(inl, N - N / 5);
+	for (int i = 0; i < N; i += 5)
+		assert_int_equal(mask[i], 0);
+	assert_int_equal(mvod_cv_decompose_essential(E, R1, R2, tu), 0);
+	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, NULL);
+	assert_int_equal(front, inl);
+	double dR[9];
+	mvod_mat3_mul_bt(Rb, R, dR);
+	assert_true(mvod_rot_angle(dR) < 1e-6);
+	assert_true(mvod_vec3_angle(tb, t) < 1e-5);
+}
+
+static void test_midpoint_parallel_rays(void **state)
+{
+	(void)state;
+	double R[9], t[3] = {0, 0, 0}, d1, d2;
+	double w[3] = {0, 0, 0};
+	mvod_rot_exp(w, R);
+	double x[2] = {0.1, 0.2};
+	assert_false(mvod_triangulate_midpoint(R, t, x, x, &d1, &d2));
+}
+
+static void test_relative_scale(void **state)
+{
+	(void)state;
+	/* The same structure at 2.5 times the size: s = 2.5 exactly, despite 20 % outliers. */
+	double prev[3 * N], cur[3 * N], scratch[N];
+	for (int i = 0; i < N; i++) {
+		for (int k = 0; k < 3; k++)
+			cur[3 * i + k] = sin(i * 1.7 + k) * 4 + (k == 2 ? 10 : 0);
+		for (int k = 0; k < 3; k++)
+			prev[3 * i + k] = 2.5 * cur[3 * i + k];
+		if (i % 5 == 0)
+			prev[3 * i] += 7 + i;
+	}
+	double s = 0;
+	assert_int_equal(mvod_motion_relative_scale(prev, cur, N, 10, scratch, &s), 0);
+	assert_true(fabs(s - 2.5) < 1e-12);
+	assert_int_equal(mvod_motion_relative_scale(prev, cur, 8, 10, scratch, &s), -ENODATA);
+}
+
+static void test_rotation_only(void **state)
+{
+	(void)state;
+	double R[9], t[3] = {0, 0, 0}, X[3 * N], x1[2 * N], x2[2 * N], Rb[9];
+	double w[3] = {0.01, 0.2, -0.03};
+	mvod_rot_exp(w, R);
+	scene(R, t, X, x1, x2);
+	uint8_t mask[N];
+	memset(mask, 1, sizeof(mask));
+	assert_int_equal(mvod_motion_rotation_only(x1, x2, mask, N, Rb), 0);
+	double dR[9];
+	mvod_mat3_mul_bt(Rb, R, dR);
+	assert_true(mvod_rot_angle(dR) < 1e-9);
+}
+
+static void test_median(void **state)
+{
+	(void)state;
+	double v[] = {5, 1, 4, 2, 3};
+	assert_true(mvod_median(v, 5) == 3);
+	double w[] = {7, 7, 7, 1};
+	assert_true(mvod_median(w, 4) == 7);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_decompose_and_cheirality),
+		cmocka_unit_test(test_ransac_with_outliers),
+		cmocka_unit_test(test_midpoint_parallel_rays),
+		cmocka_unit_test(test_relative_scale),
+		cmocka_unit_test(test_rotation_only),
+		cmocka_unit_test(test_median),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,146 @@
+/* Trajectory writers and readers (both formats round-trip), and the bounded plot path. */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "mvod/traj.h"
+
+static char dir[64];
+
+static int setup(void **state)
+{
+	(void)state;
+	strcpy(dir, "/tmp/mvod-test-traj-XXXXXX");
+	return mkdtemp(dir) ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+	(void)state;
+	char cmd[128];
+	snprintf(cmd, sizeof(cmd), "rm -rf %s", dir);
+	return system(cmd);
+}
+
+static void make_pose(int i, struct mvod_pose *p)
+{
+	double w[3] = {0.01 * i, -0.3 + 0.02 * i, 0.005 * i * i};
+	mvod_rot_exp(w, p->R);
+	p->t[0] = 0.5 * i;
+	p->t[1] = -0.01 * i;
+	p->t[2] = 1.25 * i + 0.125;
+}
+
+static void round_trip(enum mvod_traj_format fmt, double tol)
+{
+	char path[128];
+	snprintf(path, sizeof(path), "%s/traj.%s", dir, mvod_traj_format_name(fmt));
+	struct mvod_traj_writer *w;
+	assert_int_equal(mvod_traj_writer_open(path, fmt, &w), 0);
+	for (int i = 0; i < 50; i++) {
+		struct mvod_pose p;
+		make_pose(i, &p);
+		assert_int_equal(mvod_traj_writer_add(w, 1000.0 + 0.1 * i, &p), 0);
+	}
+	assert_int_equal(mvod_traj_writer_close(w), 0);
+	struct mvod_traj tr;
+	char err[256];
+	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), 0);
+	assert_int_equal(tr.n, 50);
+	assert_int_equal(tr.format, fmt);
+	for (int i = 0; i < 50; i++) {
+		struct mvod_pose p;
+		make_pose(i, &p);
+		for (int k = 0; k < 9; k++)
+			assert_true(fabs(tr.pose[i].R[k] - p.R[k]) < tol);
+		for (int k = 0; k < 3; k++)
+			assert_true(fabs(tr.pose[i].t[k] - p.t[k]) < tol * 10);
+		if (fmt == MVOD_TRAJ_TUM)
+			assert_true(fabs(tr.t[i] - (1000.0 + 0.1 * i)) < 1e-6);
+	}
+	mvod_traj_free(&tr);
+}
+
+static void test_tum_round_trip(void **state)
+{
+	(void)state;
+	/* %.9g quaternions: rotation entries to ~1e-8. */
+	round_trip(MVOD_TRAJ_TUM, 1e-7);
+}
+
+static void test_kitti_round_trip(void **state)
+{
+	(void)state;
+	round_trip(MVOD_TRAJ_KITTI, 1e-8);
+}
+
+static void test_load_errors(void **state)
+{
+	(void)state;
+	char path[128], err[256] = "";
+	struct mvod_traj tr;
+	snprintf(path, sizeof(path), "%s/bad.txt", dir);
+	FILE *f = fopen(path, "w");
+	fputs("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0\n", f);
+	fclose(f);
+	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "bad.txt:2"));
+	f = fopen(path, "w");
+	fputs("# only a comment\n\n", f);
+	fclose(f);
+	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "no poses"));
+	assert_int_equal(mvod_traj_load("/nonexistent/x", &tr, err, sizeof(err)), -ENOENT);
+}
+
+static void test_writer_reports_full_disk(void **state)
+{
+	(void)state;
+	if (access("/dev/full", W_OK) != 0)
+		skip();
+	struct mvod_traj_writer *w;
+	assert_int_equal(mvod_traj_writer_open("/dev/full", MVOD_TRAJ_TUM, &w), 0);
+	struct mvod_pose p;
+	make_pose(1, &p);
+	assert_int_equal(mvod_traj_writer_add(w, 0, &p), -ENOSPC);
+	assert_int_equal(mvod_traj_writer_close(w), -ENOSPC);
+}
+
+static void test_path_decimates_in_fixed_memory(void **state)
+{
+	(void)state;
+	struct mvod_path p;
+	assert_int_equal(mvod_path_init(&p, 100), 0);
+	double *buf = p.xyz;
+	for (int i = 0; i < 100000; i++) {
+		double x[3] = {i, 0, 0};
+		mvod_path_add(&p, x);
+		assert_true(p.n <= 100);
+	}
+	assert_ptr_equal(p.xyz, buf);
+	/* Kept points are evenly spaced samples starting at the first. */
+	assert_true(p.n >= 50);
+	for (int i = 0; i < p.n; i++)
+		assert_true(p.xyz[3 * i] == (double)(i * p.stride));
+	mvod_path_fini(&p);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_tum_round_trip),
+		cmocka_unit_test(test_kitti_round_trip),
+		cmocka_unit_test(test_load_errors),
+		cmocka_unit_test(test_writer_reports_full_disk),
+		cmocka_unit_test(test_path_decimates_in_fixed_memory),
+	};
+	return cmocka_run_group_tests(tests, setup, teardown);
+}
