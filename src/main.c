@@ -291,10 +291,23 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 	if (!s->have_gt)
 		return;
 	printf("mvod: accuracy vs ground truth: rotation error %.3f deg/frame (max %.3f), "
-	       "direction error %.2f deg/frame (max %.2f), ATE %.3f m over %.1f m (%s)\n",
-	       s->rpe.rot_deg_mean, s->rpe.rot_deg_max, s->rpe.dir_deg_mean, s->rpe.dir_deg_max,
-	       s->ate_rmse_m, s->path_len_m,
-	       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
+	       "direction error %.2f deg/frame (max %.2f), ",
+	       s->rpe.rot_deg_mean, s->rpe.rot_deg_max, s->rpe.dir_deg_mean, s->rpe.dir_deg_max);
+	if (isnan(s->ate_rmse_m))
+		printf("ATE n/a (the ground truth does not move)\n");
+	else
+		printf("ATE %.3f m over %.1f m (%s)\n", s->ate_rmse_m, s->path_len_m,
+		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
+}
+
+/*
+ * FFmpeg prints its own diagnostics for a corrupt file before mvod can say which file and what
+ * to do; keep them for --log-level debug. A value the user exported wins.
+ */
+static void quiet_ffmpeg(void)
+{
+	if (mvod_log_get_level() < MVOD_LOG_DEBUG)
+		setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
 }
 
 int main(int argc, char **argv)
@@ -303,6 +316,7 @@ int main(int argc, char **argv)
 	int ret = parse_cli(argc, argv, &c);
 	if (ret)
 		return ret > 0 ? 0 : EXIT_USAGE;
+	quiet_ffmpeg();
 	struct sigaction sa = {.sa_handler = on_signal};
 	sigaction(SIGINT, &sa, NULL);
 	sigaction(SIGTERM, &sa, NULL);

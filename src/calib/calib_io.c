@@ -3,7 +3,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,22 +12,10 @@
 
 #include <cjson/cJSON.h>
 
+#include "util/errbuf.h"
+
 /* Calibration files are small; anything bigger is not one. */
 #define CALIB_MAX_BYTES (4 * 1024 * 1024)
-
-static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
-	__attribute__((format(printf, 4, 5)));
-
-static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-	if (err && errlen) {
-		va_list ap;
-		va_start(ap, fmt);
-		vsnprintf(err, errlen, fmt, ap);
-		va_end(ap);
-	}
-	return code;
-}
 
 static const char *const model_names[] = {"pinhole-radtan", "fisheye-kb4"};
 
@@ -61,7 +48,7 @@ static int read_text(const char *path, char **out, char *err, size_t errlen)
 {
 	FILE *f = fopen(path, "rb");
 	if (!f)
-		return fail(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
+		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
 	char *buf = malloc(CALIB_MAX_BYTES + 1);
 	int ret = 0;
 	if (!buf) {
@@ -70,11 +57,11 @@ static int read_text(const char *path, char **out, char *err, size_t errlen)
 	}
 	size_t n = fread(buf, 1, CALIB_MAX_BYTES + 1, f);
 	if (ferror(f)) {
-		ret = fail(err, errlen, -EIO, "cannot read %s", path);
+		ret = mvod_errf(err, errlen, -EIO, "cannot read %s", path);
 		goto out;
 	}
 	if (n > CALIB_MAX_BYTES) {
-		ret = fail(err, errlen, -EFBIG, "%s is larger than %d MiB: not a calibration file", path,
+		ret = mvod_errf(err, errlen, -EFBIG, "%s is larger than %d MiB: not a calibration file", path,
 			   CALIB_MAX_BYTES >> 20);
 		goto out;
 	}
@@ -144,16 +131,16 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
 	int ret = 0;
 	cJSON *root = cJSON_Parse(text);
 	if (!root)
-		return fail(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
+		return mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
 			    cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "?");
 	const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
 	if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, MVOD_CALIB_FORMAT) != 0) {
-		ret = fail(err, errlen, -EINVAL, "\"format\" must be \"%s\"", MVOD_CALIB_FORMAT);
+		ret = mvod_errf(err, errlen, -EINVAL, "\"format\" must be \"%s\"", MVOD_CALIB_FORMAT);
 		goto out;
 	}
 	const cJSON *model = cJSON_GetObjectItemCaseSensitive(root, "model");
 	if (!cJSON_IsString(model) || mvod_cam_model_parse(model->valuestring, &c.model) != 0) {
-		ret = fail(err, errlen, -EINVAL,
+		ret = mvod_errf(err, errlen, -EINVAL,
 			   "\"model\" must be \"pinhole-radtan\" or \"fisheye-kb4\"");
 		goto out;
 	}
@@ -162,20 +149,20 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
 			      NULL) != 0 ||
 	    size[0] < 1 || size[1] < 1 || size[0] > 65535 || size[1] > 65535 ||
 	    size[0] != floor(size[0]) || size[1] != floor(size[1])) {
-		ret = fail(err, errlen, -EINVAL, "\"image_size\" must be [width, height] in pixels");
+		ret = mvod_errf(err, errlen, -EINVAL, "\"image_size\" must be [width, height] in pixels");
 		goto out;
 	}
 	c.width = (int)size[0];
 	c.height = (int)size[1];
 	if (json_K(cJSON_GetObjectItemCaseSensitive(root, "K"), &c) != 0 || !valid_intrinsics(&c)) {
-		ret = fail(err, errlen, -EINVAL,
+		ret = mvod_errf(err, errlen, -EINVAL,
 			   "\"K\" must be [[fx,0,cx],[0,fy,cy],[0,0,1]] with fx, fy > 0");
 		goto out;
 	}
 	const cJSON *dist = cJSON_GetObjectItemCaseSensitive(root, "distortion");
 	if (json_number_array(dist, c.dist, 0, MVOD_MAX_DIST, &c.n_dist) != 0 ||
 	    !valid_dist_count(c.model, c.n_dist)) {
-		ret = fail(err, errlen, -EINVAL,
+		ret = mvod_errf(err, errlen, -EINVAL,
 			   "\"distortion\" must hold %s numbers for model %s",
 			   c.model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14",
 			   mvod_cam_model_name(c.model));
@@ -221,9 +208,9 @@ int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, 
 		return ret;
 	ret = parse_kitti(text, cam);
 	if (ret == -ENOENT)
-		fail(err, errlen, -EINVAL, "%s: no \"P0:\" line (not a KITTI calib.txt)", path);
+		mvod_errf(err, errlen, -EINVAL, "%s: no \"P0:\" line (not a KITTI calib.txt)", path);
 	else if (ret)
-		fail(err, errlen, -EINVAL, "%s: \"P0:\" needs 12 numbers with fx, fy > 0", path);
+		mvod_errf(err, errlen, -EINVAL, "%s: \"P0:\" needs 12 numbers with fx, fy > 0", path);
 	free(text);
 	return ret ? -EINVAL : 0;
 }
@@ -241,11 +228,11 @@ int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t
 	if (*p == '{') {
 		ret = mvod_calib_parse_json(text, cam, why, sizeof(why));
 		if (ret)
-			fail(err, errlen, ret, "%s: %s", path, why);
+			mvod_errf(err, errlen, ret, "%s: %s", path, why);
 	} else if (strstr(text, "P0:")) {
 		ret = mvod_calib_load_kitti(path, cam, err, errlen);
 	} else {
-		ret = fail(err, errlen, -EINVAL,
+		ret = mvod_errf(err, errlen, -EINVAL,
 			   "%s: unknown calibration format (expected mvod JSON or KITTI calib.txt)",
 			   path);
 	}

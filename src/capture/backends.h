@@ -5,6 +5,7 @@
 #include <stddef.h>
 
 #include "mvod/capture.h"
+#include "util/errbuf.h"
 
 extern const struct mvod_source_ops mvod_source_file_ops;
 extern const struct mvod_source_ops mvod_source_images_ops;

@@ -32,12 +32,12 @@ static int check_file(const char *path, char *err, size_t errlen)
 	struct stat st;
 	int ret = stat(path, &st) < 0 || access(path, R_OK) < 0 ? -errno : 0;
 	if (ret == -ENOENT)
-		return mvod_capture_fail(err, errlen, ret, "no such file: %s", path);
+		return mvod_errf(err, errlen, ret, "no such file: %s", path);
 	if (ret < 0)
-		return mvod_capture_fail(err, errlen, ret, "cannot read %s: %s", path,
+		return mvod_errf(err, errlen, ret, "cannot read %s: %s", path,
 					 strerror(-ret));
 	if (S_ISDIR(st.st_mode))
-		return mvod_capture_fail(err, errlen, -EISDIR, "%s is a directory: for an image "
+		return mvod_errf(err, errlen, -EISDIR, "%s is a directory: for an image "
 					 "sequence write images:%s", path, path);
 	return 0;
 }
@@ -50,11 +50,11 @@ static int file_open(void *priv, const char *path, char *err, size_t errlen)
 		return ret;
 	ret = mvod_video_open(path, &fs->video);
 	if (ret < 0)
-		return mvod_capture_fail(err, errlen, ret, "cannot decode video %s: FFmpeg cannot "
+		return mvod_errf(err, errlen, ret, "cannot decode video %s: FFmpeg cannot "
 					 "read it (corrupt, or not a video)", path);
 	mvod_video_props(fs->video, &fs->info);
 	if (fs->info.width <= 0 || fs->info.height <= 0) {
-		ret = mvod_capture_fail(err, errlen, -EINVAL, "cannot decode video %s: no frame "
+		ret = mvod_errf(err, errlen, -EINVAL, "cannot decode video %s: no frame "
 					"size in the stream", path);
 		goto fail;
 	}

@@ -75,7 +75,7 @@ static int list_images(struct mvod_images *im, const char *dir, char *err, size_
 {
 	DIR *d = opendir(dir);
 	if (!d)
-		return mvod_capture_fail(err, errlen, -errno, "cannot open image directory %s: %s",
+		return mvod_errf(err, errlen, -errno, "cannot open image directory %s: %s",
 					 dir, strerror(errno));
 	int ret = 0;
 	size_t n, bytes;
@@ -83,7 +83,7 @@ static int list_images(struct mvod_images *im, const char *dir, char *err, size_
 	if (n > 0) {
 		im->paths = malloc(n * sizeof(*im->paths) + bytes);
 		if (!im->paths) {
-			ret = mvod_capture_fail(err, errlen, -ENOMEM, "out of memory listing %s",
+			ret = mvod_errf(err, errlen, -ENOMEM, "out of memory listing %s",
 						dir);
 			goto out;
 		}
@@ -92,7 +92,7 @@ static int list_images(struct mvod_images *im, const char *dir, char *err, size_
 		qsort(im->paths, im->n, sizeof(*im->paths), compare_paths);
 	}
 	if (im->n == 0)
-		ret = mvod_capture_fail(err, errlen, -ENOENT,
+		ret = mvod_errf(err, errlen, -ENOENT,
 					"no images in %s (looked for .png .jpg .jpeg .pgm .ppm "
 					".bmp .tif .tiff)", dir);
 out:
@@ -128,7 +128,7 @@ static int parse_times(FILE *f, const char *path, int64_t *t, size_t n, char *er
 			continue;
 		if (ret < 0) {
 			line[strcspn(line, "\r\n")] = '\0';
-			ret = mvod_capture_fail(err, errlen, -EINVAL,
+			ret = mvod_errf(err, errlen, -EINVAL,
 						"%s line %zu: \"%.40s\" is not a time in seconds",
 						path, lineno, line);
 			goto out;
@@ -137,7 +137,7 @@ static int parse_times(FILE *f, const char *path, int64_t *t, size_t n, char *er
 	}
 	ret = 0;
 	if (k < n)
-		ret = mvod_capture_fail(err, errlen, -EINVAL,
+		ret = mvod_errf(err, errlen, -EINVAL,
 					"%s has %zu timestamps for %zu images; it needs one line "
 					"per image", path, k, n);
 out:
@@ -152,13 +152,13 @@ static int load_times(struct mvod_images *im, const char *path, char *err, size_
 	if (!f) {
 		if (errno == ENOENT)
 			return -ENOENT;
-		return mvod_capture_fail(err, errlen, -errno, "cannot read %s: %s", path,
+		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path,
 					 strerror(errno));
 	}
 	int ret = 0;
 	im->times_us = malloc(im->n * sizeof(*im->times_us));
 	if (!im->times_us) {
-		ret = mvod_capture_fail(err, errlen, -ENOMEM, "out of memory reading %s", path);
+		ret = mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", path);
 		goto out;
 	}
 	ret = parse_times(f, path, im->times_us, im->n, err, errlen);
@@ -228,15 +228,15 @@ static int load_first(struct mvod_images *im, char *err, size_t errlen)
 {
 	int ret = mvod_imgdec_create(&im->dec);
 	if (ret < 0)
-		return mvod_capture_fail(err, errlen, ret, "cannot create an image decoder: %s",
+		return mvod_errf(err, errlen, ret, "cannot create an image decoder: %s",
 					 strerror(-ret));
 	struct mvod_image img;
 	ret = load(im, 0, &img);
 	if (ret == -EINVAL)
-		return mvod_capture_fail(err, errlen, ret, "cannot decode image %s (corrupt, or "
+		return mvod_errf(err, errlen, ret, "cannot decode image %s (corrupt, or "
 					 "not an image)", im->paths[0]);
 	if (ret < 0)
-		return mvod_capture_fail(err, errlen, ret, "cannot read %s: %s", im->paths[0],
+		return mvod_errf(err, errlen, ret, "cannot read %s: %s", im->paths[0],
 					 strerror(-ret));
 	im->info.width = img.w;
 	im->info.height = img.h;

@@ -22,23 +22,12 @@ struct mvod_source {
 	max_align_t priv[];           /* ops->priv_size bytes of backend state */
 };
 
-int mvod_capture_fail(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-	if (err && errlen) {
-		va_list ap;
-		va_start(ap, fmt);
-		vsnprintf(err, errlen, fmt, ap);
-		va_end(ap);
-	}
-	return code;
-}
-
 int mvod_capture_path(char *buf, size_t len, const char *dir, const char *name, char *err,
 		      size_t errlen)
 {
 	int n = snprintf(buf, len, "%s/%s", dir, name);
 	if (n < 0 || (size_t)n >= len)
-		return mvod_capture_fail(err, errlen, -ENAMETOOLONG, "path too long: %s/%s", dir,
+		return mvod_errf(err, errlen, -ENAMETOOLONG, "path too long: %s/%s", dir,
 					 name);
 	return 0;
 }
@@ -77,15 +66,15 @@ static int unknown_scheme(const char *uri, char *err, size_t errlen)
 	const char *colon = strchr(uri, ':');
 	/* A colon inside a path ("./a:b.mkv") is no scheme separator. */
 	if (colon && colon > uri && !memchr(uri, '/', (size_t)(colon - uri)))
-		return mvod_capture_fail(err, errlen, -EPROTONOSUPPORT,
+		return mvod_errf(err, errlen, -EPROTONOSUPPORT,
 					 "unknown source scheme \"%.*s\" in \"%s\" (known: %s)",
 					 (int)(colon - uri), uri, uri, known);
 	struct stat st;
 	if (stat(uri, &st) == 0 && S_ISDIR(st.st_mode))
-		return mvod_capture_fail(err, errlen, -EPROTONOSUPPORT,
+		return mvod_errf(err, errlen, -EPROTONOSUPPORT,
 					 "source \"%s\" has no scheme: write images:%s or kitti:%s "
 					 "(known: %s)", uri, uri, uri, known);
-	return mvod_capture_fail(err, errlen, -EPROTONOSUPPORT,
+	return mvod_errf(err, errlen, -EPROTONOSUPPORT,
 				 "source \"%s\" has no scheme: for a video file write file:%s "
 				 "(known: %s)", uri, uri, known);
 }
@@ -98,7 +87,7 @@ int mvod_source_open(const char *uri, struct mvod_source **out, char *err, size_
 		return unknown_scheme(uri, err, errlen);
 	struct mvod_source *src = calloc(1, sizeof(*src) + ops->priv_size);
 	if (!src)
-		return mvod_capture_fail(err, errlen, -ENOMEM, "out of memory opening %s", uri);
+		return mvod_errf(err, errlen, -ENOMEM, "out of memory opening %s", uri);
 	src->ops = ops;
 	int ret = ops->open(src->priv, location, err, errlen);
 	if (ret < 0)

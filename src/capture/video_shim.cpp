@@ -4,25 +4,13 @@
 #include <climits>
 #include <cmath>
 #include <memory>
-#include <new>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
-/* Every entry point runs its body through this: no exception crosses into C. */
-template <typename F> static int guarded(F &&body) noexcept
-{
-	try {
-		return body();
-	} catch (const std::bad_alloc &) {
-		return -ENOMEM;
-	} catch (const cv::Exception &) {
-		return -EIO;
-	} catch (...) {
-		return -EIO;
-	}
-}
+#include "util/shim_guard.hpp"
+
 
 /* A view of m, valid while m keeps its buffer. */
 static int view_of(cv::Mat &m, struct mvod_image *img)
@@ -41,7 +29,7 @@ struct mvod_video {
 
 extern "C" int mvod_video_open(const char *path, struct mvod_video **out)
 {
-	return guarded([&] {
+	return mvod_guarded([&] {
 		auto v = std::make_unique<mvod_video>();
 		if (!v->cap.open(path, cv::CAP_FFMPEG))
 			return -EINVAL;
@@ -53,7 +41,7 @@ extern "C" int mvod_video_open(const char *path, struct mvod_video **out)
 extern "C" void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info)
 {
 	*info = {0, 0, 0.0, -1};
-	(void)guarded([&] {
+	(void)mvod_guarded([&] {
 		info->width = (int)v->cap.get(cv::CAP_PROP_FRAME_WIDTH);
 		info->height = (int)v->cap.get(cv::CAP_PROP_FRAME_HEIGHT);
 		double fps = v->cap.get(cv::CAP_PROP_FPS);
@@ -67,7 +55,7 @@ extern "C" void mvod_video_props(struct mvod_video *v, struct mvod_source_info *
 
 extern "C" int mvod_video_read(struct mvod_video *v, struct mvod_image *img, int64_t *media_us)
 {
-	return guarded([&] {
+	return mvod_guarded([&] {
 		if (!v->cap.read(v->frame))
 			return -ENODATA;
 		/* After a read, POS_MSEC is the presentation time of the frame just decoded. */
@@ -129,7 +117,7 @@ struct mvod_imgdec {
 
 extern "C" int mvod_imgdec_create(struct mvod_imgdec **out)
 {
-	return guarded([&] {
+	return mvod_guarded([&] {
 		auto *d = new mvod_imgdec();
 		d->img.allocator = &d->alloc;
 		*out = d;
@@ -142,7 +130,7 @@ extern "C" int mvod_imgdec_decode(struct mvod_imgdec *d, const void *buf, size_t
 {
 	if (len == 0 || len > INT_MAX)
 		return -EINVAL;
-	return guarded([&] {
+	return mvod_guarded([&] {
 		cv::Mat raw(1, (int)len, CV_8UC1, const_cast<void *>(buf));
 		d->img.release();
 		cv::imdecode(raw, d->flags, &d->img);

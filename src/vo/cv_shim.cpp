@@ -1,7 +1,7 @@
 #include "cv_shim.h"
 
 #include <cerrno>
-#include <new>
+#include <cstring>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -9,19 +9,8 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
-/* Every entry point runs its body through this: no exception crosses into C. */
-template <typename F> static int guarded(F &&body) noexcept
-{
-	try {
-		return body();
-	} catch (const std::bad_alloc &) {
-		return -ENOMEM;
-	} catch (const cv::Exception &) {
-		return -EIO;
-	} catch (...) {
-		return -EIO;
-	}
-}
+#include "util/shim_guard.hpp"
+
 
 static cv::Mat view(const struct mvod_image *img)
 {
@@ -61,7 +50,7 @@ extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resi
 	if (cam->width <= 0 || cam->height <= 0 || !(resize > 0 && resize <= 1) ||
 	    (blur_ksize && (blur_ksize < 0 || blur_ksize % 2 == 0)))
 		return -EINVAL;
-	return guarded([&] {
+	return mvod_guarded([&] {
 		auto *p = new mvod_cv_preproc();
 		p->in_w = cam->width;
 		p->in_h = cam->height;
@@ -97,7 +86,7 @@ extern "C" int mvod_cv_preproc_run(struct mvod_cv_preproc *p, const struct mvod_
 		return -EINVAL;
 	if (in->fmt != MVOD_PIX_GREY && in->fmt != MVOD_PIX_BGR)
 		return -EINVAL;
-	return guarded([&] {
+	return mvod_guarded([&] {
 		cv::Mat src = view(in);
 		if (in->fmt == MVOD_PIX_BGR) {
 			cv::cvtColor(src, p->grey, cv::COLOR_BGR2GRAY);
@@ -136,7 +125,7 @@ extern "C" int mvod_cv_orb_create(int max_features, int width, int height, struc
 {
 	if (max_features < 8 || width < 32 || height < 32)
 		return -EINVAL;
-	return guarded([&] {
+	return mvod_guarded([&] {
 		auto *o = new mvod_cv_orb();
 		o->orb = cv::ORB::create(max_features);
 		o->kps.reserve((size_t)max_features * 2);
@@ -151,7 +140,7 @@ extern "C" int mvod_cv_orb_detect(struct mvod_cv_orb *o, const struct mvod_image
 {
 	if (grey->fmt != MVOD_PIX_GREY)
 		return -EINVAL;
-	return guarded([&] {
+	return mvod_guarded([&] {
 		o->orb->detectAndCompute(view(grey), cv::noArray(), o->kps, o->desc);
 		int n = std::min((int)o->kps.size(), out->cap);
 		for (int i = 0; i < n; i++) {
@@ -176,7 +165,7 @@ extern "C" int mvod_cv_find_essential(const double *x1, const double *x2, int n,
 {
 	if (n < 5)
 		return -EINVAL;
-	return guarded([&] {
+	return mvod_guarded([&] {
 		cv::Mat m1(n, 2, CV_64F, const_cast<double *>(x1));
 		cv::Mat m2(n, 2, CV_64F, const_cast<double *>(x2));
 		cv::Mat msk(n, 1, CV_8U, mask);
@@ -194,7 +183,7 @@ extern "C" int mvod_cv_find_essential(const double *x1, const double *x2, int n,
 
 extern "C" int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3])
 {
-	return guarded([&] {
+	return mvod_guarded([&] {
 		cv::Matx33d e(E), r1, r2;
 		cv::Vec3d tv;
 		cv::decomposeEssentialMat(e, r1, r2, tv);
@@ -210,7 +199,7 @@ extern "C" int mvod_cv_decompose_essential(const double E[9], double R1[9], doub
 
 extern "C" int mvod_cv_svd3(const double A[9], double U[9], double S[3], double Vt[9])
 {
-	return guarded([&] {
+	return mvod_guarded([&] {
 		cv::Matx33d a(A), u, vt;
 		cv::Vec3d s;
 		cv::SVD::compute(a, s, u, vt, cv::SVD::FULL_UV);

@@ -145,7 +145,7 @@ int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t 
 				H[3 * r + c] += (b1[r] / n1) * (b2[c] / n2);
 		used++;
 	}
-	if (used < 3)
+	if (used < 2)
 		return -EINVAL;
 	double U[9], S[3], Vt[9];
 	int ret = mvod_cv_svd3(H, U, S, Vt);
@@ -163,4 +163,60 @@ int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t 
 		D[2] = -1; /* a reflection: flip the weakest axis */
 	}
 	return 0;
+}
+
+double mvod_motion_rotation_residual(const double R[9], const double x1[2], const double x2[2])
+{
+	double r[3] = {x1[0], x1[1], 1.0}, p[3];
+	mvod_mat3_vec(R, r, p);
+	if (p[2] <= 1e-9)
+		return INFINITY;
+	return hypot(p[0] / p[2] - x2[0], p[1] / p[2] - x2[1]);
+}
+
+static int rotation_inliers(const double *x1, const double *x2, int n, const double R[9],
+			    double thresh, uint8_t *mask)
+{
+	int count = 0;
+	for (int i = 0; i < n; i++) {
+		uint8_t in = mvod_motion_rotation_residual(R, x1 + 2 * i, x2 + 2 * i) < thresh;
+		if (mask)
+			mask[i] = in;
+		count += in;
+	}
+	return count;
+}
+
+int mvod_motion_rotation_ransac(const double *x1, const double *x2, int n, double thresh,
+				int iterations, uint8_t *mask, double R[9])
+{
+	if (n < 2)
+		return 0;
+	uint32_t state = 0x9e3779b9u;
+	int best = 0;
+	for (int it = 0; it < iterations; it++) {
+		state = state * 1664525u + 1013904223u;
+		int i = (int)((state >> 8) % (uint32_t)n);
+		state = state * 1664525u + 1013904223u;
+		int j = (int)((state >> 8) % (uint32_t)n);
+		if (i == j)
+			continue;
+		const double a[4] = {x1[2 * i], x1[2 * i + 1], x1[2 * j], x1[2 * j + 1]};
+		const double b[4] = {x2[2 * i], x2[2 * i + 1], x2[2 * j], x2[2 * j + 1]};
+		const uint8_t both[2] = {1, 1};
+		double Rs[9];
+		if (mvod_motion_rotation_only(a, b, both, 2, Rs) != 0)
+			continue;
+		int c = rotation_inliers(x1, x2, n, Rs, thresh, NULL);
+		if (c > best) {
+			best = c;
+			memcpy(R, Rs, sizeof(Rs));
+		}
+	}
+	for (int pass = 0; best >= 2 && pass < 2; pass++) {
+		rotation_inliers(x1, x2, n, R, thresh, mask);
+		if (mvod_motion_rotation_only(x1, x2, mask, n, R) != 0)
+			break;
+	}
+	return best >= 2 ? rotation_inliers(x1, x2, n, R, thresh, mask) : 0;
 }

@@ -44,9 +44,20 @@ double mvod_median(double *v, int n);
 
 /*
  * Best rotation with x2 ~ R x1 for the points with mask set (Kabsch on unit bearings), for
- * frames with no measurable translation. Returns -EINVAL for fewer than 3 points.
+ * frames with no measurable translation. Returns -EINVAL for fewer than 2 points.
  */
 int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t *mask, int n,
 			      double R[9]);
+
+/* Distance in the normalised image plane between R x1 (projected) and x2; INFINITY behind. */
+double mvod_motion_rotation_residual(const double R[9], const double x1[2], const double x2[2]);
+
+/*
+ * Robust rotation-only model: RANSAC over two-point Kabsch samples (a fixed sample sequence,
+ * so runs repeat exactly), then two refits on the inliers (residual < thresh, normalised
+ * units). Sets mask and R; returns the inlier count (0 when nothing fits).
+ */
+int mvod_motion_rotation_ransac(const double *x1, const double *x2, int n, double thresh,
+				int iterations, uint8_t *mask, double R[9]);
 
 #endif

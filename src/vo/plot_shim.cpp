@@ -16,6 +16,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "util/shim_guard.hpp"
+
 namespace {
 
 const int CANVAS_W = 1000, CANVAS_H = 800;
@@ -482,13 +484,6 @@ extern "C" int mvod_plot_topdown(const char *path, const char *title, const doub
 {
 	if (!path || n_est < 0 || n_gt < 0 || (n_est > 0 && !est_xyz) || (n_gt > 0 && !gt_xyz))
 		return -EINVAL;
-	try {
-		return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt});
-	} catch (const std::bad_alloc &) {
-		return -ENOMEM;
-	} catch (const cv::Exception &) {
-		return -EIO;
-	} catch (...) {
-		return -EIO;
-	}
+	return mvod_guarded(
+		[&] { return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}); });
 }

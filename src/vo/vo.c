@@ -214,22 +214,16 @@ static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k
 	x[1] = (k->y - c->cy) / c->fy;
 }
 
-/* Median pixel distance between where rotation alone would put each inlier and where it is. */
+/*
+ * Median over all matches of the flow rotation alone does not explain, in pixels: the parallax
+ * that translation made. A median, so that up to half the matches may be wrong.
+ */
 static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
 {
-	int m = 0;
-	for (int i = 0; i < n; i++) {
-		if (!vo->mask[i])
-			continue;
-		double r[3] = {vo->x1[2 * i], vo->x1[2 * i + 1], 1.0}, p[3];
-		mvod_mat3_vec(R, r, p);
-		if (p[2] <= 1e-9)
-			continue;
-		double du = (p[0] / p[2] - vo->x2[2 * i]) * vo->cam.fx;
-		double dv = (p[1] / p[2] - vo->x2[2 * i + 1]) * vo->cam.fy;
-		vo->scratch[m++] = sqrt(du * du + dv * dv);
-	}
-	return m ? mvod_median(vo->scratch, m) : 0.0;
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	for (int i = 0; i < n; i++)
+		vo->scratch[i] = mvod_motion_rotation_residual(R, vo->x1 + 2 * i, vo->x2 + 2 * i) * f;
+	return n ? mvod_median(vo->scratch, n) : 0.0;
 }
 
 /*
@@ -299,6 +293,25 @@ static void apply_motion(struct mvod_vo *vo, const double R[9], const double t[3
 	mvod_pose_compose(&vo->ref->pose, &inv, &vo->pose);
 }
 
+/*
+ * A camera that only rotates (or stands still) gives a degenerate essential matrix: any t
+ * fits. So the rotation-only model is tried first; if it explains the flow to within
+ * min_parallax_px, the frame is a rotation and translation is left alone.
+ */
+static bool rotation_only(struct mvod_vo *vo, int n, struct mvod_vo_result *res)
+{
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy), R[9];
+	double thresh = (vo->p.min_parallax_px + vo->p.ransac_px) / f;
+	int inl = mvod_motion_rotation_ransac(vo->x1, vo->x2, n, thresh, 64, vo->mask, R);
+	if (inl < vo->p.min_inliers || rotation_free_parallax(vo, R, n) >= vo->p.min_parallax_px)
+		return false;
+	double t0[3] = {0, 0, 0};
+	apply_motion(vo, R, t0, 0.0);
+	res->inliers = inl;
+	res->scale_source = MVOD_SCALE_NONE;
+	return true;
+}
+
 static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 				       struct mvod_vo_result *res)
 {
@@ -307,6 +320,8 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 		normalise(&vo->cam, &vo->ref->f.kp[vo->matches[i].a], vo->x1 + 2 * i);
 		normalise(&vo->cam, &vo->cur->f.kp[vo->matches[i].b], vo->x2 + 2 * i);
 	}
+	if (rotation_only(vo, n, res))
+		return MVOD_FRAME_ROTATION;
 	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
 	double E[9], R1[9], R2[9], tu[3], R[9], t[3];
 	int inl = 0;
@@ -319,12 +334,6 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 	res->inliers = mvod_motion_cheirality(R1, R2, tu, vo->x1, vo->x2, vo->mask, n, R, t, vo->depth);
 	if (res->inliers < vo->p.min_inliers)
 		return MVOD_FRAME_FEW_INLIERS;
-	if (rotation_free_parallax(vo, R, n) < vo->p.min_parallax_px) {
-		mvod_motion_rotation_only(vo->x1, vo->x2, vo->mask, n, R);
-		apply_motion(vo, R, t, 0.0);
-		res->scale_source = MVOD_SCALE_NONE;
-		return MVOD_FRAME_ROTATION;
-	}
 	double s = step_length(vo, n, gt, &res->scale_source);
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);

@@ -14,6 +14,7 @@
 #include <stddef.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -110,6 +111,55 @@ static void test_rotate_in_place_no_drift(void **state)
 	assert_true(e.max_translation < 1e-6);
 }
 
+/* A black frame (P5 PGM of zeros) replacing frame i of an images/ sequence. */
+static void blacken(const char *images, int i, int w, int h)
+{
+	char path[400];
+	snprintf(path, sizeof(path), "%s/%06d.png", images, i);
+	assert_int_equal(unlink(path), 0);
+	snprintf(path, sizeof(path), "%s/%06d.pgm", images, i);
+	FILE *f = fopen(path, "wb");
+	assert_non_null(f);
+	fprintf(f, "P5\n%d %d\n255\n", w, h);
+	for (int k = 0; k < w * h; k++)
+		fputc(0, f);
+	fclose(f);
+}
+
+static void test_black_frames_hold_and_recover(void **state)
+{
+	(void)state;
+	char dir[256], src[400], images[300], calib[300], gt[300], out[300];
+	snprintf(dir, sizeof(dir), "%s/black", harness_tmpdir());
+	harness_synth(dir, "forward", 30, "png");
+	snprintf(images, sizeof(images), "%s/images", dir);
+	blacken(images, 10, 640, 480);
+	blacken(images, 11, 640, 480);
+	snprintf(src, sizeof(src), "images:%s", images);
+	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
+	snprintf(gt, sizeof(gt), "%s/gt.tum", dir);
+	snprintf(out, sizeof(out), "%s/est.tum", dir);
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--calib", calib, "--gt", gt,
+			"--scale", "gt", "--trajectory", out, "--no-lcm", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status != 0)
+		fail_msg("mvod failed (%d): %s", r.status, r.err);
+	assert_non_null(strstr(r.err, "LOST"));
+	struct mvod_traj est;
+	char err[256];
+	assert_int_equal(mvod_traj_load(out, &est, err, sizeof(err)), 0);
+	assert_int_equal(est.n, 30);
+	/* The black frames hold the last pose exactly... */
+	assert_memory_equal(&est.pose[10], &est.pose[9], sizeof(est.pose[9]));
+	assert_memory_equal(&est.pose[11], &est.pose[9], sizeof(est.pose[9]));
+	mvod_traj_free(&est);
+	/* ...and tracking resumes against the last good frame: the path stays right. */
+	struct traj_errors e;
+	harness_compare(out, gt, 0, &e);
+	assert_true(e.ate_m < 0.05 * e.length_m);
+}
+
 static int teardown(void **state)
 {
 	(void)state;
@@ -126,6 +176,7 @@ int main(void)
 		cmocka_unit_test(test_turn_free_scale),
 		cmocka_unit_test(test_static_no_drift),
 		cmocka_unit_test(test_rotate_in_place_no_drift),
+		cmocka_unit_test(test_black_frames_hold_and_recover),
 	};
 	return cmocka_run_group_tests(tests, NULL, teardown);
 }

@@ -1,5 +1,6 @@
 /* Essential matrix, its decomposition, cheirality and relative scale on exact synthetic data. */
 #include <errno.h>
+#include <stdbool.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -75,9 +76,8 @@ static void test_decompose_and_cheirality(void **state)
 		assert_true(fabs(depth[i] - X[3 * i + 2]) < 1e-6 * X[3 * i + 2]);
 }
 
-static void test_ransac_with_outliers(void **state)
+static void robust_with_outliers(bool magsac)
 {
-	(void)state;
 	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
 	motion(R, t);
 	scene(R, t, X, x1, x2);
@@ -90,7 +90,7 @@ static void test_ransac_with_outliers(void **state)
 	uint8_t mask[N];
 	int inl = 0;
 	/* Normalised coordinates, 1 px at f = 500. */
-	assert_int_equal(mvod_cv_find_essential(x1, x2, N, false, 1.0 / 500, 0.999, E, mask, &inl), 0);
+	assert_int_equal(mvod_cv_find_essential(x1, x2, N, magsac, 1.0 / 500, 0.999, E, mask, &inl), 0);
 	assert_int_equal(inl, N - N / 5);
 	for (int i = 0; i < N; i += 5)
 		assert_int_equal(mask[i], 0);
@@ -101,6 +101,18 @@ static void test_ransac_with_outliers(void **state)
 	mvod_mat3_mul_bt(Rb, R, dR);
 	assert_true(mvod_rot_angle(dR) < 1e-6);
 	assert_true(mvod_vec3_angle(tb, t) < 1e-5);
+}
+
+static void test_ransac_with_outliers(void **state)
+{
+	(void)state;
+	robust_with_outliers(false);
+}
+
+static void test_magsac_with_outliers(void **state)
+{
+	(void)state;
+	robust_with_outliers(true);
 }
 
 static void test_midpoint_parallel_rays(void **state)
@@ -161,6 +173,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_decompose_and_cheirality),
 		cmocka_unit_test(test_ransac_with_outliers),
+		cmocka_unit_test(test_magsac_with_outliers),
 		cmocka_unit_test(test_midpoint_parallel_rays),
 		cmocka_unit_test(test_relative_scale),
 		cmocka_unit_test(test_rotation_only),

@@ -1,0 +1,11 @@
+/* One-line error reasons handed back to the caller, who logs them with context. */
+#ifndef MVOD_ERRBUF_H
+#define MVOD_ERRBUF_H
+
+#include <stddef.h>
+
+/* Formats the reason into err (when err is non-NULL and errlen > 0) and returns code. */
+int mvod_errf(char *err, size_t errlen, int code, const char *fmt, ...)
+	__attribute__((format(printf, 4, 5)));
+
+#endif
