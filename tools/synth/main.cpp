@@ -1,1 +1,527 @@
-int main() { return 0; }
+// mvod-synth: renders a textured 3-D street seen by a moving camera, with exact ground truth,
+// so that mvod's visual odometry and calibration can be tested against known answers.
+
+#include "failure.hpp"
+#include "paths.hpp"
+#include "render.hpp"
+#include "world.hpp"
+
+extern "C" {
+#include "mvod/calib.h"
+#include "mvod/traj.h"
+}
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+
+#include <getopt.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace synth;
+
+namespace {
+
+const char kUsage[] = R"(Usage: mvod-synth --out DIR [options]
+
+Renders a textured 3-D street (ground, facades, boxes, poles, sky) seen by a moving camera,
+with the exact camera poses and intrinsics, for testing visual odometry and calibration.
+The same arguments and seed always give identical frames.
+
+Writes into DIR (created if missing; earlier outputs there are replaced):
+  video.mkv                lossless FFV1 8-bit grey video (--format mkv)
+  images/000000.png ...    8-bit grey PNG per frame, and images/times.txt (--format png)
+  times.txt                timestamp of every frame in seconds, one per line
+  gt.tum, gt.kitti         camera-to-world pose of every frame (OpenCV axes: x right, y down,
+                           z forward; metres; for built-in paths the first camera is the world)
+  calib.json               intrinsics and distortion (mvod-calibration/1)
+
+Options:
+  --out DIR              output directory (required)
+  --path NAME|FILE       camera path (default forward); the ground is 1.6 m below the camera:
+      forward            straight along +z with a slight sway (+-3 cm sideways, +-0.5 deg yaw,
+                         +-0.3 deg pitch)
+      turn               straight, a smooth 90 deg left turn over the middle 40% of the
+                         distance, then straight
+      circle             a left circle of radius 6 m, inside a ring of facades
+      figure8            a lap of a left circle then one of a right circle (radius 6 m),
+                         touching at the start
+      rotate-in-place    yaw swinging +-30 deg (left first, period 6 s) about the camera
+                         centre, no translation
+      static             the identity pose in every frame
+      FILE               KITTI (12 numbers per line) or TUM (t tx ty tz qx qy qz qw) poses,
+                         camera-to-world, metres, y down; a street is built along them
+  --frames N             frames to render (default 60; for a FILE its first N poses,
+                         default all)
+  --fps F                frame rate in Hz (default 10): frame i is at i/F s, except that TUM
+                         files keep their own timestamps
+  --speed V              speed along built-in paths in m/s (default 1.0)
+  --size WxH             image size in pixels (default 640x480)
+  --fx F, --fy F         focal lengths in pixels (default fx = 0.9 * width, fy = fx)
+  --cx F, --cy F         principal point in pixels (default (width-1)/2, (height-1)/2)
+  --distortion K1,K2,P1,P2[,K3]
+                         radial-tangential lens distortion, OpenCV's model (default none)
+  --fisheye K1,K2,K3,K4  Kannala-Brandt lens distortion, OpenCV's fisheye model
+  --noise SIGMA          additive Gaussian noise, standard deviation in grey levels (default 0)
+  --blur SIGMA           Gaussian blur, standard deviation in pixels, applied before the noise
+                         (default 0)
+  --seed N               seed for the world, its textures and the noise (default 1)
+  --format mkv|png       output format (default mkv)
+  -h, --help             show this help
+
+Exit status: 0 on success, 1 on a run-time failure (unreadable pose file, unwritable output),
+2 on bad usage.
+)";
+
+struct Options {
+	std::string out;
+	std::string path = "forward";
+	int frames = 0; // 0: the path's default
+	double fps = 10;
+	int width = 640, height = 480;
+	double fx = NAN, fy = NAN, cx = NAN, cy = NAN; // NAN: derived from the size
+	bool fisheye = false;
+	std::vector<double> dist;
+	double noise = 0, blur = 0;
+	uint64_t seed = 1;
+	bool png = false;
+	double speed = 1.0;
+};
+
+[[noreturn]] void usage_error(const std::string &message)
+{
+	throw Failure(kExitUsage, message + " (see --help)");
+}
+
+double parse_number(const char *option, const char *text)
+{
+	char *end = nullptr;
+	errno = 0;
+	const double v = std::strtod(text, &end);
+	if (end == text || *end != '\0' || errno != 0 || !std::isfinite(v))
+		usage_error(std::string("--") + option + ": '" + text + "' is not a number");
+	return v;
+}
+
+double parse_positive(const char *option, const char *text)
+{
+	const double v = parse_number(option, text);
+	if (v <= 0)
+		usage_error(std::string("--") + option + " must be positive, not " + text);
+	return v;
+}
+
+double parse_non_negative(const char *option, const char *text)
+{
+	const double v = parse_number(option, text);
+	if (v < 0)
+		usage_error(std::string("--") + option + " must not be negative, not " + text);
+	return v;
+}
+
+uint64_t parse_unsigned(const char *option, const char *text)
+{
+	char *end = nullptr;
+	errno = 0;
+	const unsigned long long v = std::strtoull(text, &end, 10);
+	if (end == text || *end != '\0' || errno != 0 || std::strchr(text, '-'))
+		usage_error(std::string("--") + option + ": '" + text + "' is not a whole number >= 0");
+	return v;
+}
+
+int parse_count(const char *option, const char *text)
+{
+	const uint64_t v = parse_unsigned(option, text);
+	if (v < 1 || v > 10000000)
+		usage_error(std::string("--") + option + " must be between 1 and 10000000, not " + text);
+	return int(v);
+}
+
+std::vector<double> parse_list(const char *option, const char *text, size_t min, size_t max)
+{
+	const std::string list = text;
+	std::vector<double> values;
+	for (size_t start = 0;;) {
+		const size_t comma = list.find(',', start);
+		values.push_back(parse_number(option, list.substr(start, comma - start).c_str()));
+		if (comma == std::string::npos)
+			break;
+		start = comma + 1;
+	}
+	if (values.size() < min || values.size() > max)
+		usage_error(std::string("--") + option + " takes " + std::to_string(min) +
+			    (max > min ? " or " + std::to_string(max) : std::string()) + " comma-separated numbers, not '" +
+			    text + "'");
+	return values;
+}
+
+void parse_size(const char *text, Options &o)
+{
+	const std::string size = text;
+	const size_t x = size.find('x');
+	const auto side = [&](const std::string &digits) {
+		return digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 5
+			       ? 0
+			       : std::stoi(digits);
+	};
+	const int w = x == std::string::npos ? 0 : side(size.substr(0, x));
+	const int h = x == std::string::npos ? 0 : side(size.substr(x + 1));
+	if (w < 16 || h < 16 || w > 16384 || h > 16384)
+		usage_error("--size: '" + size + "' is not WIDTHxHEIGHT with each side 16..16384 pixels");
+	o.width = w;
+	o.height = h;
+}
+
+Options parse_options(int argc, char **argv)
+{
+	enum { OUT = 256, PATH, FRAMES, FPS, SIZE, FX, FY, CX, CY, DISTORTION, FISHEYE, NOISE, BLUR, SEED, FORMAT, SPEED };
+	static const option longopts[] = {
+		{"out", required_argument, nullptr, OUT},
+		{"path", required_argument, nullptr, PATH},
+		{"frames", required_argument, nullptr, FRAMES},
+		{"fps", required_argument, nullptr, FPS},
+		{"size", required_argument, nullptr, SIZE},
+		{"fx", required_argument, nullptr, FX},
+		{"fy", required_argument, nullptr, FY},
+		{"cx", required_argument, nullptr, CX},
+		{"cy", required_argument, nullptr, CY},
+		{"distortion", required_argument, nullptr, DISTORTION},
+		{"fisheye", required_argument, nullptr, FISHEYE},
+		{"noise", required_argument, nullptr, NOISE},
+		{"blur", required_argument, nullptr, BLUR},
+		{"seed", required_argument, nullptr, SEED},
+		{"format", required_argument, nullptr, FORMAT},
+		{"speed", required_argument, nullptr, SPEED},
+		{"help", no_argument, nullptr, 'h'},
+		{nullptr, 0, nullptr, 0},
+	};
+
+	Options o;
+	bool radtan = false;
+	opterr = 0; // our own messages, in our own format
+	for (int c; (c = getopt_long(argc, argv, ":h", longopts, nullptr)) != -1;) {
+		const char *name = c >= OUT ? longopts[c - OUT].name : "";
+		switch (c) {
+		case OUT: o.out = optarg; break;
+		case PATH: o.path = optarg; break;
+		case FRAMES: o.frames = parse_count(name, optarg); break;
+		case FPS: o.fps = parse_positive(name, optarg); break;
+		case SIZE: parse_size(optarg, o); break;
+		case FX: o.fx = parse_positive(name, optarg); break;
+		case FY: o.fy = parse_positive(name, optarg); break;
+		case CX: o.cx = parse_number(name, optarg); break;
+		case CY: o.cy = parse_number(name, optarg); break;
+		case DISTORTION:
+			o.dist = parse_list(name, optarg, 4, 5);
+			radtan = true;
+			break;
+		case FISHEYE:
+			o.dist = parse_list(name, optarg, 4, 4);
+			o.fisheye = true;
+			break;
+		case NOISE: o.noise = parse_non_negative(name, optarg); break;
+		case BLUR: o.blur = parse_non_negative(name, optarg); break;
+		case SEED: o.seed = parse_unsigned(name, optarg); break;
+		case FORMAT:
+			if (std::strcmp(optarg, "mkv") != 0 && std::strcmp(optarg, "png") != 0)
+				usage_error(std::string("--format: '") + optarg + "' is neither mkv nor png");
+			o.png = std::strcmp(optarg, "png") == 0;
+			break;
+		case SPEED: o.speed = parse_positive(name, optarg); break;
+		case 'h':
+			std::fputs(kUsage, stdout);
+			std::exit(0);
+		case ':': usage_error(std::string(argv[optind - 1]) + " needs a value");
+		default: usage_error(std::string("unknown option '") + argv[optind - 1] + "'");
+		}
+	}
+	if (optind < argc)
+		usage_error(std::string("unexpected argument '") + argv[optind] + "'");
+	if (o.out.empty())
+		usage_error("--out DIR is required");
+	if (radtan && o.fisheye)
+		usage_error("--distortion and --fisheye are two lens models: give one");
+	return o;
+}
+
+Camera camera_from(const Options &o)
+{
+	Camera cam;
+	cam.width = o.width;
+	cam.height = o.height;
+	cam.fx = std::isnan(o.fx) ? 0.9 * o.width : o.fx;
+	cam.fy = std::isnan(o.fy) ? cam.fx : o.fy;
+	cam.cx = std::isnan(o.cx) ? (o.width - 1) / 2.0 : o.cx;
+	cam.cy = std::isnan(o.cy) ? (o.height - 1) / 2.0 : o.cy;
+	cam.fisheye = o.fisheye;
+	cam.dist = o.dist;
+	return cam;
+}
+
+std::string quote(const std::string &arg)
+{
+	return arg.find_first_of(" \t\"'") == std::string::npos ? arg : "'" + arg + "'";
+}
+
+std::string errno_text(int negative_errno)
+{
+	return std::strerror(-negative_errno);
+}
+
+// Everything written into the output directory. Trajectory lines are added frame by frame by
+// writers that leave only whole lines behind, so an interrupted run still has a valid prefix.
+class Output {
+public:
+	Output(const Options &o, const Camera &cam, const std::string &command_line) : dir_(o.out), png_(o.png)
+	{
+		std::error_code ec;
+		fs::create_directories(png_ ? dir_ / "images" : dir_, ec);
+		if (ec || !fs::is_directory(dir_))
+			throw Failure(kExitFailure, "cannot create output directory " + o.out + ": " +
+							    (ec ? ec.message() : "not a directory"));
+		if (png_)
+			remove_old_frames();
+		save_calibration(cam, command_line);
+		open_trajectory("gt.tum", MVOD_TRAJ_TUM, &tum_);
+		open_trajectory("gt.kitti", MVOD_TRAJ_KITTI, &kitti_);
+		open_times(dir_ / "times.txt", times_);
+		if (png_) {
+			open_times(dir_ / "images" / "times.txt", image_times_);
+		} else {
+			const fs::path video = dir_ / "video.mkv";
+			if (!video_.open(video.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'), o.fps,
+					 cv::Size(cam.width, cam.height), false))
+				throw Failure(kExitFailure, "cannot write " + video.string() +
+								    " (OpenCV's FFmpeg backend with the FFV1 codec)");
+		}
+	}
+
+	~Output()
+	{
+		mvod_traj_writer_close(tum_);
+		mvod_traj_writer_close(kitti_);
+	}
+
+	void add(double t, const Pose &pose, const cv::Mat &image)
+	{
+		if (png_) {
+			char name[32];
+			std::snprintf(name, sizeof name, "%06d.png", frames_);
+			const fs::path file = dir_ / "images" / name;
+			if (!cv::imwrite(file.string(), image))
+				throw Failure(kExitFailure, "cannot write " + file.string());
+		} else {
+			video_.write(image);
+		}
+		write_time(times_, t);
+		if (png_)
+			write_time(image_times_, t);
+
+		mvod_pose p;
+		for (int i = 0; i < 9; i++)
+			p.R[i] = pose.R.val[i];
+		for (int i = 0; i < 3; i++)
+			p.t[i] = pose.t[i];
+		mvod_traj_writer_add(tum_, t, &p);
+		mvod_traj_writer_add(kitti_, t, &p);
+		frames_++;
+	}
+
+	// Flushes and closes everything, reporting the first error any writer saw.
+	void close()
+	{
+		video_.release();
+		close_times(dir_ / "times.txt", times_);
+		if (png_)
+			close_times(dir_ / "images" / "times.txt", image_times_);
+		close_trajectory("gt.tum", &tum_);
+		close_trajectory("gt.kitti", &kitti_);
+	}
+
+private:
+	// Frames of an earlier, longer run would otherwise be read as part of this one.
+	void remove_old_frames()
+	{
+		std::error_code ec;
+		std::vector<fs::path> old;
+		for (const fs::directory_entry &e : fs::directory_iterator(dir_ / "images", ec)) {
+			const std::string name = e.path().filename().string();
+			if (name.size() == 10 && name.compare(6, 4, ".png") == 0 && name.find_first_not_of("0123456789") == 6)
+				old.push_back(e.path());
+		}
+		for (const fs::path &file : old)
+			if (!ec)
+				fs::remove(file, ec);
+		if (ec)
+			throw Failure(kExitFailure, "cannot clear old frames from " + (dir_ / "images").string() + ": " +
+							    ec.message());
+	}
+
+	void save_calibration(const Camera &cam, const std::string &command_line)
+	{
+		mvod_camera c{};
+		c.width = cam.width;
+		c.height = cam.height;
+		c.fx = cam.fx;
+		c.fy = cam.fy;
+		c.cx = cam.cx;
+		c.cy = cam.cy;
+		c.model = cam.fisheye ? MVOD_CAM_FISHEYE_KB4 : MVOD_CAM_PINHOLE_RADTAN;
+		c.n_dist = int(cam.dist.size());
+		std::copy(cam.dist.begin(), cam.dist.end(), c.dist);
+
+		mvod_calib_meta meta{};
+		meta.rms_px = -1;
+		std::snprintf(meta.source, sizeof meta.source, "%s", command_line.c_str());
+		if (command_line.size() >= sizeof meta.source) // cut, and say so
+			std::memcpy(meta.source + sizeof meta.source - 4, "...", 4);
+
+		const fs::path file = dir_ / "calib.json";
+		const int rc = mvod_calib_save(file.c_str(), &c, &meta);
+		if (rc < 0)
+			throw Failure(kExitFailure, "cannot write " + file.string() + ": " + errno_text(rc));
+	}
+
+	void open_trajectory(const char *name, mvod_traj_format format, mvod_traj_writer **writer)
+	{
+		const fs::path file = dir_ / name;
+		const int rc = mvod_traj_writer_open(file.c_str(), format, writer);
+		if (rc < 0)
+			throw Failure(kExitFailure, "cannot write " + file.string() + ": " + errno_text(rc));
+	}
+
+	void close_trajectory(const char *name, mvod_traj_writer **writer)
+	{
+		const int rc = mvod_traj_writer_close(*writer);
+		*writer = nullptr;
+		if (rc < 0)
+			throw Failure(kExitFailure, "cannot write " + (dir_ / name).string() + ": " + errno_text(rc));
+	}
+
+	static void open_times(const fs::path &file, std::ofstream &out)
+	{
+		out.open(file);
+		if (!out)
+			throw Failure(kExitFailure, "cannot write " + file.string() + ": " + std::strerror(errno));
+	}
+
+	static void close_times(const fs::path &file, std::ofstream &out)
+	{
+		out.close();
+		if (!out)
+			throw Failure(kExitFailure, "cannot write " + file.string());
+	}
+
+	static void write_time(std::ofstream &out, double t)
+	{
+		char line[64];
+		std::snprintf(line, sizeof line, "%.6f\n", t);
+		out << line << std::flush; // whole lines only, like the trajectories, if the run is cut short
+	}
+
+	fs::path dir_;
+	bool png_;
+	cv::VideoWriter video_;
+	std::ofstream times_, image_times_;
+	mvod_traj_writer *tum_ = nullptr, *kitti_ = nullptr;
+	int frames_ = 0;
+};
+
+// Blur (the lens), then noise (the sensor), then 8 bits.
+void develop(cv::Mat &image, const Options &o, cv::RNG &rng, cv::Mat &grey)
+{
+	if (o.blur > 0)
+		cv::GaussianBlur(image, image, cv::Size(), o.blur, o.blur, cv::BORDER_REFLECT_101);
+	if (o.noise > 0) {
+		cv::Mat noise(image.size(), CV_32F);
+		rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise);
+		image += noise;
+	}
+	image.convertTo(grey, CV_8U); // rounds and saturates
+}
+
+Trajectory make_trajectory(const Options &o)
+{
+	if (is_builtin_path(o.path))
+		return builtin_path(o.path, o.frames > 0 ? o.frames : 60, o.fps, o.speed);
+	// A bare word that is no file is a mistyped path name; anything else is a file to read.
+	if (o.path.find_first_of("/.") == std::string::npos && access(o.path.c_str(), F_OK) != 0)
+		usage_error("--path '" + o.path + "' is neither a built-in path (" + builtin_path_names() +
+			    ") nor a pose file");
+	return load_path(o.path, o.frames, o.fps);
+}
+
+double path_length(const Trajectory &tr)
+{
+	double length = 0;
+	for (size_t i = 1; i < tr.poses.size(); i++)
+		length += cv::norm(tr.poses[i].t - tr.poses[i - 1].t);
+	return length;
+}
+
+void run(const Options &o, const std::string &command_line)
+{
+	const Trajectory path = make_trajectory(o);
+	const Camera cam = camera_from(o);
+
+	// The street heads where the first camera looks when the path itself does not move.
+	const cv::Vec3d heading(path.poses[0].R(0, 2), 0, path.poses[0].R(2, 2));
+	const Skeleton skeleton(path.skeleton, path.closed, cv::norm(heading) > 0 ? cv::normalize(heading) : cv::Vec3d(0, 0, 1));
+	std::vector<cv::Vec3d> cameras;
+	for (const Pose &p : path.poses)
+		cameras.push_back(p.t);
+	const World world = build_street(skeleton, cameras, o.seed);
+
+	Renderer renderer(world, cam);
+	if (renderer.worst_ray_error() > 0.01) {
+		char message[160];
+		std::snprintf(message, sizeof message,
+			      "--%s: these coefficients fold the image over (some pixels have no ray; worst miss %.3g px)",
+			      o.fisheye ? "fisheye" : "distortion", renderer.worst_ray_error());
+		usage_error(message);
+	}
+
+	Output out(o, cam, command_line);
+	cv::RNG noise_rng(stream_seed(o.seed, 7));
+	cv::Mat image, grey;
+	for (size_t i = 0; i < path.poses.size(); i++) {
+		renderer.render(path.poses[i], image);
+		develop(image, o, noise_rng, grey);
+		out.add(path.times[i], path.poses[i], grey);
+	}
+	out.close();
+
+	std::printf("mvod-synth: %zu frames, %dx%d, path %.2f m, written to %s\n", path.poses.size(), cam.width, cam.height,
+		    path_length(path), o.out.c_str());
+}
+
+} // namespace
+
+int main(int argc, char **argv)
+{
+	std::string command_line = "mvod-synth";
+	for (int i = 1; i < argc; i++)
+		command_line += " " + quote(argv[i]);
+
+	try {
+		run(parse_options(argc, argv), command_line);
+	} catch (const Failure &f) {
+		std::fprintf(stderr, "mvod-synth: %s\n", f.what());
+		return f.status;
+	} catch (const std::exception &e) { // OpenCV errors, out of memory
+		std::fprintf(stderr, "mvod-synth: %s\n", e.what());
+		return kExitFailure;
+	}
+	return 0;
+}
