@@ -296,7 +296,8 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 	if (isnan(s->ate_rmse_m))
 		printf("ATE n/a (the ground truth does not move)\n");
 	else
-		printf("ATE %.3f m over %.1f m (%s)\n", s->ate_rmse_m, s->path_len_m,
+		printf("ATE %.3f m over %.1f m, %.1f %% (%s)\n", s->ate_rmse_m, s->path_len_m,
+		       100.0 * s->ate_rmse_m / fmax(s->path_len_m, 1e-9),
 		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
 }
 

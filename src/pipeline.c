@@ -39,6 +39,7 @@ struct run {
 	double t_start, last_status;
 	enum mvod_track_state state;
 	int traj_failed;
+	int plot_aligned; /* the plotted estimate was Sim(3)-aligned to the ground truth */
 };
 
 static double now_s(void)
@@ -282,6 +283,22 @@ static int loop(struct run *r, volatile sig_atomic_t *stop)
 	return 0;
 }
 
+/*
+ * A free-scale estimate is in units of its first step: drawn raw beside metric ground truth
+ * it says nothing. Plot it through the same Sim(3) alignment the ATE uses.
+ */
+static void align_for_plot(struct run *r, const double R[9], const double t[3], double sc)
+{
+	for (int i = 0; i < r->est_path.n; i++) {
+		double *p = r->est_path.xyz + 3 * i;
+		mvod_mat3_vec(R, p, p);
+		for (int k = 0; k < 3; k++)
+			p[k] = sc * p[k] + t[k];
+	}
+	mvod_mat3_mul(R, r->prev_est.R, r->prev_est.R);
+	r->plot_aligned = 1;
+}
+
 static void summarise(struct run *r)
 {
 	struct mvod_run_summary *s = r->sum;
@@ -296,10 +313,13 @@ static void summarise(struct run *r)
 		return;
 	double R[9], t[3], sc;
 	bool sim3 = r->o->vo.scale_mode == MVOD_SCALE_MODE_AUTO;
-	if (mvod_umeyama(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, sim3, R, t, &sc) == 0)
-		s->ate_rmse_m = mvod_ate_rmse(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, R, t, sc);
-	else
+	if (mvod_umeyama(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, sim3, R, t, &sc) != 0) {
 		s->ate_rmse_m = NAN; /* static or too short: no alignment exists */
+		return;
+	}
+	s->ate_rmse_m = mvod_ate_rmse(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, R, t, sc);
+	if (sim3)
+		align_for_plot(r, R, t, sc);
 }
 
 static int write_plot(struct run *r)
@@ -307,7 +327,8 @@ static int write_plot(struct run *r)
 	if (!r->o->plot)
 		return 0;
 	char title[256];
-	snprintf(title, sizeof(title), "mvod: %s", r->o->source);
+	snprintf(title, sizeof(title), "mvod: %s%s", r->o->source,
+		 r->plot_aligned ? " (Sim(3)-aligned to ground truth)" : "");
 	int ret = mvod_plot_topdown(r->o->plot, title, r->est_path.xyz, r->est_path.n,
 				    r->have_prev ? r->prev_est.R : NULL, r->gt_path.xyz, r->gt_path.n);
 	if (ret)

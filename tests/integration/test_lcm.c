@@ -76,8 +76,9 @@ static void test_memq_one_pose_per_frame(void **state)
 	lcm_t *lcm = lcm_create("memq://");
 	assert_non_null(lcm);
 	struct received got = {0};
-	mvod_pose_t_subscribe(lcm, "TEST_POSE", on_pose, &got);
-	mvod_status_t_subscribe(lcm, "TEST_STATUS", on_status, &got);
+	mvod_pose_t_subscription_t *ps = mvod_pose_t_subscribe(lcm, "TEST_POSE", on_pose, &got);
+	mvod_status_t_subscription_t *ss =
+		mvod_status_t_subscribe(lcm, "TEST_STATUS", on_status, &got);
 	struct mvod_ipc *ipc;
 	assert_int_equal(mvod_ipc_create_on(lcm, "TEST_POSE", "TEST_STATUS", &ipc), 0);
 
@@ -102,6 +103,8 @@ static void test_memq_one_pose_per_frame(void **state)
 		assert_true(llabs(got.utime[i] - (int64_t)i * 1000000 / FPS) <= 1000);
 	}
 	mvod_ipc_destroy(ipc);
+	mvod_pose_t_unsubscribe(lcm, ps);
+	mvod_status_t_unsubscribe(lcm, ss);
 	lcm_destroy(lcm);
 }
 
