@@ -44,6 +44,13 @@ void harness_cleanup(void)
 	tmpdir[0] = '\0';
 }
 
+int harness_teardown(void **state)
+{
+	(void)state;
+	harness_cleanup();
+	return 0;
+}
+
 /* Drains both pipes until the child closes them, so neither can fill up and block it. */
 static void drain(int fo, int fe, struct run_result *r)
 {

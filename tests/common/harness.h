@@ -24,6 +24,8 @@ const char *harness_bin(const char *env);
 /* A fresh temporary directory, removed by harness_cleanup(). */
 const char *harness_tmpdir(void);
 void harness_cleanup(void);
+/* A cmocka group teardown that calls harness_cleanup(). */
+int harness_teardown(void **state);
 /* Renders a sequence with mvod-synth into dir; extra args NULL-terminated. Asserts success. */
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format);
 

@@ -64,13 +64,6 @@ static void test_kitti_07(void **state)
 	run_clip(&(struct clip){"07", 160, 0.2, 5, 6});
 }
 
-static int teardown(void **state)
-{
-	(void)state;
-	harness_cleanup();
-	return 0;
-}
-
 int main(void)
 {
 	const char *data = getenv("MVOD_DATA");
@@ -83,5 +76,5 @@ int main(void)
 		cmocka_unit_test(test_kitti_06),
 		cmocka_unit_test(test_kitti_07),
 	};
-	return cmocka_run_group_tests(tests, NULL, teardown);
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }

@@ -63,13 +63,6 @@ static int setup(void **state)
 	return 0;
 }
 
-static int teardown(void **state)
-{
-	(void)state;
-	harness_cleanup();
-	return 0;
-}
-
 static void test_memq_one_pose_per_frame(void **state)
 {
 	(void)state;
@@ -150,5 +143,5 @@ int main(void)
 		cmocka_unit_test(test_memq_one_pose_per_frame),
 		cmocka_unit_test(test_file_log_from_binary),
 	};
-	return cmocka_run_group_tests(tests, setup, teardown);
+	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

@@ -161,13 +161,6 @@ static void test_black_frames_hold_and_recover(void **state)
 	assert_true(e.ate_m < 0.05 * e.length_m);
 }
 
-static int teardown(void **state)
-{
-	(void)state;
-	harness_cleanup();
-	return 0;
-}
-
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -179,5 +172,5 @@ int main(void)
 		cmocka_unit_test(test_rotate_in_place_no_drift),
 		cmocka_unit_test(test_black_frames_hold_and_recover),
 	};
-	return cmocka_run_group_tests(tests, NULL, teardown);
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }

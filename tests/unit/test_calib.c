@@ -11,23 +11,17 @@
 
 #include <cmocka.h>
 
+#include "harness.h"
+
 #include "mvod/calib.h"
 
-static char dir[64];
+static const char *dir;
 
 static int setup(void **state)
 {
 	(void)state;
-	strcpy(dir, "/tmp/mvod-test-calib-XXXXXX");
-	return mkdtemp(dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-	(void)state;
-	char cmd[128];
-	snprintf(cmd, sizeof(cmd), "rm -rf %s", dir);
-	return system(cmd);
+	dir = harness_tmpdir();
+	return 0;
 }
 
 static const char *write_file(const char *name, const char *text)
@@ -182,5 +176,5 @@ int main(void)
 		cmocka_unit_test(test_load_errors),
 		cmocka_unit_test(test_save_round_trip),
 	};
-	return cmocka_run_group_tests(tests, setup, teardown);
+	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

@@ -11,23 +11,17 @@
 
 #include <cmocka.h>
 
+#include "harness.h"
+
 #include "mvod/traj.h"
 
-static char dir[64];
+static const char *dir;
 
 static int setup(void **state)
 {
 	(void)state;
-	strcpy(dir, "/tmp/mvod-test-traj-XXXXXX");
-	return mkdtemp(dir) ? 0 : -1;
-}
-
-static int teardown(void **state)
-{
-	(void)state;
-	char cmd[128];
-	snprintf(cmd, sizeof(cmd), "rm -rf %s", dir);
-	return system(cmd);
+	dir = harness_tmpdir();
+	return 0;
 }
 
 static void make_pose(int i, struct mvod_pose *p)
@@ -142,5 +136,5 @@ int main(void)
 		cmocka_unit_test(test_writer_reports_full_disk),
 		cmocka_unit_test(test_path_decimates_in_fixed_memory),
 	};
-	return cmocka_run_group_tests(tests, setup, teardown);
+	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
