@@ -202,9 +202,8 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 	mvod_path_add(&r->est_path, res->pose.t);
 	if (gt) {
 		mvod_path_add(&r->gt_path, gt->t);
-		if (r->have_prev)
-			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
 		if (r->have_prev) {
+			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
 			double d[3] = {gt->t[0] - r->prev_gt.t[0], gt->t[1] - r->prev_gt.t[1],
 				       gt->t[2] - r->prev_gt.t[2]};
 			s->path_len_m += mvod_vec3_norm(d);
