@@ -33,7 +33,7 @@ struct run {
 	struct mvod_ipc *ipc;
 	struct mvod_path est_path, gt_path;
 	struct mvod_pose prev_est, prev_gt;
-	int have_prev;
+	int have_prev, prev_had_gt; /* a frame has been recorded; it had a ground-truth pose */
 	struct mvod_run_summary *sum;
 	double stage_total[MVOD_STAGE_COUNT];
 	double t_start, last_status;
@@ -202,7 +202,7 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 	mvod_path_add(&r->est_path, res->pose.t);
 	if (gt) {
 		mvod_path_add(&r->gt_path, gt->t);
-		if (r->have_prev) {
+		if (r->prev_had_gt) {
 			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
 			double d[3] = {gt->t[0] - r->prev_gt.t[0], gt->t[1] - r->prev_gt.t[1],
 				       gt->t[2] - r->prev_gt.t[2]};
@@ -210,6 +210,7 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 		}
 		r->prev_gt = *gt;
 	}
+	r->prev_had_gt = gt != NULL;
 	r->prev_est = res->pose;
 	r->have_prev = 1;
 }
