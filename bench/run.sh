@@ -38,3 +38,13 @@ run "mvod-synth figure8, 300 frames 640x480, free scale" --source "file:$out/fig
 run "mvod-synth figure8, 300 frames 640x480, ground-truth scale" \
 	--source "file:$out/fig8/video.mkv" --calib "$out/fig8/calib.json" --gt "$out/fig8/gt.tum" \
 	--scale gt
+
+# Instruction counts repeat exactly where wall time does not: compare these across changes.
+dir=$data/kitti-odometry-06-clip
+if command -v valgrind >/dev/null && [ -d "$dir" ]; then
+	echo "## callgrind, KITTI 06 clip, first 20 frames, ground-truth scale"
+	valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" "$build/mvod" --no-lcm -q \
+		--source "kitti:$dir/sequences/06" --gt "$dir/poses/06.txt" --scale gt --max-frames 20 \
+		2>&1 | sed -n 's/.*Collected : /    instructions: /p'
+	callgrind_annotate "$out/cg.out" 2>/dev/null | grep -E '^ *[0-9,]+ \(' | sed -n '2,6p'
+fi
