@@ -46,19 +46,24 @@ static int count_in_front(const double R[9], const double t[3], const double *x1
 
 int mvod_motion_cheirality(const double R1[9], const double R2[9], const double t[3],
 			   const double *x1, const double *x2, const uint8_t *mask, int n,
-			   double R[9], double t_out[3], double *depth1)
+			   double R[9], double t_out[3], double *depth1, int *runner_up)
 {
 	const double *Rs[4] = {R1, R1, R2, R2};
 	const double sign[4] = {1, -1, 1, -1};
-	int best = -1, best_count = -1;
+	int best = -1, best_count = -1, second = 0;
 	for (int k = 0; k < 4; k++) {
 		double tk[3] = {sign[k] * t[0], sign[k] * t[1], sign[k] * t[2]};
 		int c = count_in_front(Rs[k], tk, x1, x2, mask, n, NULL);
 		if (c > best_count) {
+			second = best_count < 0 ? 0 : best_count;
 			best_count = c;
 			best = k;
+		} else if (c > second) {
+			second = c;
 		}
 	}
+	if (runner_up)
+		*runner_up = second;
 	memcpy(R, Rs[best], 9 * sizeof(double));
 	for (int i = 0; i < 3; i++)
 		t_out[i] = sign[best] * t[i];

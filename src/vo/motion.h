@@ -9,8 +9,18 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-/* Points farther than this many baselines are too close to infinity to vote (as recoverPose). */
-#define MVOD_MOTION_MAX_DEPTH 50.0
+/*
+ * Points farther than this many baselines (a parallax under 0.3 deg) are too close to
+ * infinity to vote: their side of the camera is noise. recoverPose uses 50, which at robot
+ * speeds (0.1 m per frame) drops everything beyond 5 m and leaves too few votes.
+ */
+#define MVOD_MOTION_MAX_DEPTH 200.0
+/*
+ * Only points within this many baselines (a parallax over 1 deg) are triangulated well enough
+ * to carry scale from one step to the next; farther ones made free-scale drift 4x worse on
+ * the KITTI paths.
+ */
+#define MVOD_MOTION_SCALE_DEPTH 50.0
 
 /*
  * Depths of one correspondence along its two rays: d1 in camera 1, d2 in camera 2, from the
@@ -22,12 +32,13 @@ bool mvod_triangulate_midpoint(const double R[9], const double t[3], const doubl
 /*
  * Resolves the fourfold ambiguity of an essential matrix: for each of (R1, t), (R1, -t),
  * (R2, t), (R2, -t), triangulates the points with mask[i] set, and keeps the candidate with
- * the most points in front of both cameras (0 < d <= MAX_DEPTH). Writes R, t, and for each
- * point depth1[i] (> 0 in front, 0 otherwise; may be NULL). Returns the number in front.
+ * the most points in front of both cameras (0 < d <= MAX_DEPTH). Writes R, t, for each
+ * point depth1[i] (> 0 in front, 0 otherwise; may be NULL), and the runner-up's count (may be
+ * NULL). Returns the number in front.
  */
 int mvod_motion_cheirality(const double R1[9], const double R2[9], const double t[3],
 			   const double *x1, const double *x2, const uint8_t *mask, int n,
-			   double R[9], double t_out[3], double *depth1);
+			   double R[9], double t_out[3], double *depth1, int *runner_up);
 
 /*
  * Relative scale s of the current unit-baseline structure against the previous structure:

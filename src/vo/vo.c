@@ -226,6 +226,12 @@ static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int 
 	return n ? mvod_median(vo->scratch, n) : 0.0;
 }
 
+/* Correspondence i is an inlier in front of both cameras, near enough to carry scale. */
+static bool well_triangulated(const struct mvod_vo *vo, int i)
+{
+	return vo->mask[i] && vo->depth[i] > 0 && vo->depth[i] <= MVOD_MOTION_SCALE_DEPTH;
+}
+
 /*
  * Step length from the structure both steps share: points the reference saw from its own
  * previous step (absolute units) against the same points from this step (unit baseline).
@@ -235,7 +241,7 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
 	int m = 0;
 	for (int i = 0; i < n; i++) {
 		int a = vo->matches[i].a;
-		if (!vo->mask[i] || vo->depth[i] <= 0 || !vo->ref->has_pt[a])
+		if (!well_triangulated(vo, i) || !vo->ref->has_pt[a])
 			continue;
 		memcpy(vo->prev_pts + 3 * m, vo->ref->pts + 3 * a, 3 * sizeof(double));
 		double *c = vo->cur_pts + 3 * m;
@@ -270,7 +276,7 @@ static void store_structure(struct mvod_vo *vo, const double R[9], const double 
 {
 	memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
 	for (int i = 0; i < n; i++) {
-		if (!vo->mask[i] || vo->depth[i] <= 0)
+		if (!well_triangulated(vo, i))
 			continue;
 		double X1[3] = {vo->x1[2 * i] * vo->depth[i] * s, vo->x1[2 * i + 1] * vo->depth[i] * s,
 				vo->depth[i] * s};
@@ -298,12 +304,14 @@ static void apply_motion(struct mvod_vo *vo, const double R[9], const double t[3
  * fits. So the rotation-only model is tried first; if it explains the flow to within
  * min_parallax_px, the frame is a rotation and translation is left alone.
  */
-static bool rotation_only(struct mvod_vo *vo, int n, struct mvod_vo_result *res)
+static bool rotation_only(struct mvod_vo *vo, int n, bool force, struct mvod_vo_result *res)
 {
 	double f = 0.5 * (vo->cam.fx + vo->cam.fy), R[9];
 	double thresh = (vo->p.min_parallax_px + vo->p.ransac_px) / f;
 	int inl = mvod_motion_rotation_ransac(vo->x1, vo->x2, n, thresh, 64, vo->mask, R);
-	if (inl < vo->p.min_inliers || rotation_free_parallax(vo, R, n) >= vo->p.min_parallax_px)
+	if (inl < vo->p.min_inliers)
+		return false;
+	if (!force && rotation_free_parallax(vo, R, n) >= vo->p.min_parallax_px)
 		return false;
 	double t0[3] = {0, 0, 0};
 	apply_motion(vo, R, t0, 0.0);
@@ -320,7 +328,7 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 		normalise(&vo->cam, &vo->ref->f.kp[vo->matches[i].a], vo->x1 + 2 * i);
 		normalise(&vo->cam, &vo->cur->f.kp[vo->matches[i].b], vo->x2 + 2 * i);
 	}
-	if (rotation_only(vo, n, res))
+	if (rotation_only(vo, n, false, res))
 		return MVOD_FRAME_ROTATION;
 	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
 	double E[9], R1[9], R2[9], tu[3], R[9], t[3];
@@ -331,9 +339,17 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 				   E, vo->mask, &inl) != 0 ||
 	    inl < vo->p.min_inliers || mvod_cv_decompose_essential(E, R1, R2, tu) != 0)
 		return MVOD_FRAME_RANSAC_FAILED;
-	res->inliers = mvod_motion_cheirality(R1, R2, tu, vo->x1, vo->x2, vo->mask, n, R, t, vo->depth);
+	int runner_up;
+	res->inliers = mvod_motion_cheirality(R1, R2, tu, vo->x1, vo->x2, vo->mask, n, R, t, vo->depth,
+					      &runner_up);
 	if (res->inliers < vo->p.min_inliers)
 		return MVOD_FRAME_FEW_INLIERS;
+	/*
+	 * Two decompositions with nearly as many points in front: the structure is too close to
+	 * infinity for the direction to be known. Keep the rotation, wait for more parallax.
+	 */
+	if (res->inliers < 2 * runner_up)
+		return rotation_only(vo, n, true, res) ? MVOD_FRAME_ROTATION : MVOD_FRAME_FEW_INLIERS;
 	double s = step_length(vo, n, gt, &res->scale_source);
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);

@@ -110,12 +110,19 @@ int harness_run(char *const argv[], struct run_result *r)
 	return 0;
 }
 
-void harness_synth(const char *dir, const char *path_name, int frames, const char *format)
+void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...)
 {
 	char nframes[16];
 	snprintf(nframes, sizeof(nframes), "%d", frames);
-	char *argv[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", (char *)dir, "--path",
-			(char *)path_name, "--frames", nframes, "--format", (char *)format, NULL};
+	char *argv[32] = {(char *)harness_bin("MVOD_SYNTH"), "--out", (char *)dir, "--path",
+			  (char *)path_name, "--frames", nframes, "--format", (char *)format};
+	int n = 9;
+	va_list ap;
+	va_start(ap, format);
+	for (char *a; n < 31 && (a = va_arg(ap, char *));)
+		argv[n++] = a;
+	va_end(ap);
+	argv[n] = NULL;
 	struct run_result r;
 	assert_int_equal(harness_run(argv, &r), 0);
 	if (!r.exited || r.status != 0)

@@ -26,8 +26,8 @@ const char *harness_tmpdir(void);
 void harness_cleanup(void);
 /* A cmocka group teardown that calls harness_cleanup(). */
 int harness_teardown(void **state);
-/* Renders a sequence with mvod-synth into dir; extra args NULL-terminated. Asserts success. */
-void harness_synth(const char *dir, const char *path_name, int frames, const char *format);
+/* Renders a sequence with mvod-synth into dir; then extra arguments, NULL-terminated. */
+void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...);
 
 /* Errors of an estimated trajectory against ground truth, frame by frame (same count). */
 struct traj_errors {

@@ -23,14 +23,18 @@
 struct vo_case {
 	const char *path;
 	int frames;
-	const char *scale; /* "gt" or "auto" */
+	const char *scale;    /* "gt" or "auto" */
+	const char *label;    /* names the output folder when extra is set */
+	const char *extra[5]; /* more mvod-synth arguments (lens), NULL-terminated */
 };
 
 static void run_vo(const struct vo_case *c, struct traj_errors *e)
 {
 	char dir[256], video[300], calib[300], gt[300], out[300];
-	snprintf(dir, sizeof(dir), "%s/%s-%s", harness_tmpdir(), c->path, c->scale);
-	harness_synth(dir, c->path, c->frames, "mkv");
+	snprintf(dir, sizeof(dir), "%s/%s-%s%s", harness_tmpdir(), c->path, c->scale,
+		 c->label ? c->label : "");
+	harness_synth(dir, c->path, c->frames, "mkv", c->extra[0], c->extra[1], c->extra[2],
+		      c->extra[3], c->extra[4], NULL);
 	snprintf(video, sizeof(video), "file:%s/video.mkv", dir);
 	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
 	snprintf(gt, sizeof(gt), "%s/gt.tum", dir);
@@ -54,7 +58,7 @@ static void test_forward_gt_scale(void **state)
 {
 	(void)state;
 	struct traj_errors e;
-	run_vo(&(struct vo_case){"forward", 60, "gt"}, &e);
+	run_vo(&(struct vo_case){.path = "forward", .frames = 60, .scale = "gt"}, &e);
 	assert_true(e.rpe.rot_deg_mean < 0.16); /* measured 0.082 */
 	assert_true(e.rpe.rot_deg_max < 0.4);   /* 0.185 */
 	assert_true(e.rpe.dir_deg_mean < 10);   /* 5.6 */
@@ -65,7 +69,7 @@ static void test_turn_gt_scale(void **state)
 {
 	(void)state;
 	struct traj_errors e;
-	run_vo(&(struct vo_case){"turn", 80, "gt"}, &e);
+	run_vo(&(struct vo_case){.path = "turn", .frames = 80, .scale = "gt"}, &e);
 	assert_true(e.rpe.rot_deg_mean < 0.12); /* measured 0.053 */
 	assert_true(e.rpe.rot_deg_max < 0.4);   /* 0.163 */
 	assert_true(e.rpe.dir_deg_mean < 7);    /* 3.5 */
@@ -76,7 +80,7 @@ static void test_forward_free_scale(void **state)
 {
 	(void)state;
 	struct traj_errors e;
-	run_vo(&(struct vo_case){"forward", 60, "auto"}, &e);
+	run_vo(&(struct vo_case){.path = "forward", .frames = 60, .scale = "auto"}, &e);
 	assert_true(e.rpe.rot_deg_mean < 0.16);
 	/* After Sim(3) alignment the path lies within 2 % of its length of the truth. */
 	assert_true(e.ate_m < 0.02 * e.length_m); /* measured 0.053 m over 5.9 m */
@@ -86,16 +90,47 @@ static void test_turn_free_scale(void **state)
 {
 	(void)state;
 	struct traj_errors e;
-	run_vo(&(struct vo_case){"turn", 80, "auto"}, &e);
+	run_vo(&(struct vo_case){.path = "turn", .frames = 80, .scale = "auto"}, &e);
 	assert_true(e.rpe.rot_deg_mean < 0.12);
 	assert_true(e.ate_m < 0.02 * e.length_m); /* measured 0.071 m over 7.9 m */
+}
+
+/* Undistortion through the remap maps: a strongly barrel-distorted pinhole lens. */
+static void test_turn_radtan_lens(void **state)
+{
+	(void)state;
+	struct traj_errors e;
+	run_vo(&(struct vo_case){"turn", 80, "gt", "-radtan",
+				 {"--distortion", "-0.3,0.1,0.001,-0.001,0", NULL}},
+	       &e);
+	assert_true(e.rpe.rot_deg_mean < 0.12); /* measured 0.047 */
+	assert_true(e.rpe.rot_deg_max < 0.3);   /* 0.114 */
+	assert_true(e.rpe.dir_deg_mean < 6);    /* 2.9 */
+	assert_true(e.ate_m < 0.015 * e.length_m); /* 0.016 m over 7.9 m */
+}
+
+/*
+ * A wide Kannala-Brandt lens (f = 300 px, about 94 deg across): half the focal length, so
+ * about twice the angular error of the pinhole cases.
+ */
+static void test_turn_fisheye_lens(void **state)
+{
+	(void)state;
+	struct traj_errors e;
+	run_vo(&(struct vo_case){"turn", 80, "gt", "-fisheye",
+				 {"--fisheye", "0.05,-0.01,0.002,0", "--fx", "300", NULL}},
+	       &e);
+	assert_true(e.rpe.rot_deg_mean < 0.3); /* measured 0.164 */
+	assert_true(e.rpe.rot_deg_max < 0.7);  /* 0.350 */
+	assert_true(e.rpe.dir_deg_mean < 12);  /* 6.6 */
+	assert_true(e.ate_m < 0.02 * e.length_m); /* 0.060 m over 7.9 m */
 }
 
 static void test_static_no_drift(void **state)
 {
 	(void)state;
 	struct traj_errors e;
-	run_vo(&(struct vo_case){"static", 40, "auto"}, &e);
+	run_vo(&(struct vo_case){.path = "static", .frames = 40, .scale = "auto"}, &e);
 	/* Identical frames carry no parallax: not a millimetre (or unit) of invented motion. */
 	assert_true(e.max_translation < 1e-6);
 	assert_true(e.rpe.rot_deg_max < 0.01);
@@ -105,7 +140,7 @@ static void test_rotate_in_place_no_drift(void **state)
 {
 	(void)state;
 	struct traj_errors e;
-	run_vo(&(struct vo_case){"rotate-in-place", 60, "auto"}, &e);
+	run_vo(&(struct vo_case){.path = "rotate-in-place", .frames = 60, .scale = "auto"}, &e);
 	assert_true(e.rpe.rot_deg_mean < 0.04); /* measured 0.016 */
 	assert_true(e.rpe.rot_deg_max < 0.15);  /* 0.067 */
 	/* Pure rotation has no baseline: any translation would be invented. */
@@ -132,7 +167,7 @@ static void test_black_frames_hold_and_recover(void **state)
 	(void)state;
 	char dir[256], src[400], images[300], calib[300], gt[300], out[300];
 	snprintf(dir, sizeof(dir), "%s/black", harness_tmpdir());
-	harness_synth(dir, "forward", 30, "png");
+	harness_synth(dir, "forward", 30, "png", NULL);
 	snprintf(images, sizeof(images), "%s/images", dir);
 	blacken(images, 10, 640, 480);
 	blacken(images, 11, 640, 480);
@@ -168,6 +203,8 @@ int main(void)
 		cmocka_unit_test(test_turn_gt_scale),
 		cmocka_unit_test(test_forward_free_scale),
 		cmocka_unit_test(test_turn_free_scale),
+		cmocka_unit_test(test_turn_radtan_lens),
+		cmocka_unit_test(test_turn_fisheye_lens),
 		cmocka_unit_test(test_static_no_drift),
 		cmocka_unit_test(test_rotate_in_place_no_drift),
 		cmocka_unit_test(test_black_frames_hold_and_recover),

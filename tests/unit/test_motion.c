@@ -65,8 +65,11 @@ static void test_decompose_and_cheirality(void **state)
 	assert_int_equal(mvod_cv_decompose_essential(E, R1, R2, tu), 0);
 	uint8_t mask[N];
 	memset(mask, 1, sizeof(mask));
-	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, depth);
+	int runner_up = -1;
+	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, depth, &runner_up);
 	assert_int_equal(front, N);
+	/* Exact data: every other candidate puts some point behind a camera. */
+	assert_true(runner_up < N);
 	for (int k = 0; k < 9; k++)
 		assert_true(fabs(Rb[k] - R[k]) < 1e-9);
 	for (int k = 0; k < 3; k++)
@@ -95,7 +98,7 @@ static void robust_with_outliers(bool magsac)
 	for (int i = 0; i < N; i += 5)
 		assert_int_equal(mask[i], 0);
 	assert_int_equal(mvod_cv_decompose_essential(E, R1, R2, tu), 0);
-	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, NULL);
+	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, NULL, NULL);
 	assert_int_equal(front, inl);
 	double dR[9];
 	mvod_mat3_mul_bt(Rb, R, dR);
