@@ -21,18 +21,70 @@ int mvod_umeyama(const double *src, const double *dst, int n, bool with_scale, d
 double mvod_ate_rmse(const double *src, const double *dst, int n, const double R[9],
 		     const double t[3], double s);
 
-/* Relative pose error between consecutive frames. */
+/*
+ * Scale drift of a run, positions n x 3 as for mvod_umeyama: the ratio of estimated to
+ * ground-truth path length over the last 10 % of the steps (at least one), divided by the same
+ * ratio over the first 10 %. 1.0 = no drift; a global scale cancels, so no alignment is needed.
+ * Returns -EINVAL for n < 2 or when either window has no ground-truth motion (<= 1 mm) or the
+ * first has no estimated motion.
+ */
+int mvod_scale_drift(const double *est, const double *gt, int n, double *drift);
+
+/*
+ * Y Euler angle of R in radians, in [-pi/2, pi/2]: atan2(-R20, sqrt(R00^2 + R10^2)), the middle
+ * angle of R = Rz Ry Rx. With camera axes (y down) it is the heading change of a ground vehicle.
+ * Sign as mvod_rot_exp: a rotation of +a about y gives +a.
+ */
+double mvod_rot_euler_y(const double R[9]);
+
+/*
+ * The bench's per-frame error of a consecutive pair (frames i-1, i; estimate e, ground truth g;
+ * camera-to-world). Unlike the RPE it uses world-frame steps dt = t_i - t_{i-1}, dR = R_i R_{i-1}^T.
+ */
+struct mvod_frame_err {
+	double r_deg; /* |mvod_rot_euler_y(dR_e dR_g^T)|, degrees: heading error only */
+	double d_m;   /* |dt_g - (R_g,i R_e,i^T) dt_e|, metres */
+	double e;     /* (r_deg + d_m) / (0.5 + r_deg + d_m), in [0, 1) */
+};
+void mvod_frame_err(const struct mvod_pose *e0, const struct mvod_pose *e1,
+		    const struct mvod_pose *g0, const struct mvod_pose *g1,
+		    struct mvod_frame_err *out);
+
+/*
+ * Errors between consecutive frames, accumulated online (no allocation); zero-initialise, add
+ * each pair, finish once. Before mvod_rpe_finish the mean fields hold sums.
+ */
 struct mvod_rpe {
 	int n;                /* pairs counted */
-	double rot_deg_mean, rot_deg_max; /* full rotation angle of dR_e dR_g^T */
+	double rot_deg_mean, rot_deg_max; /* full rotation angle of dR_e dR_g^T (relative poses) */
 	double dir_deg_mean, dir_deg_max; /* angle between translation directions (steps > 1 mm) */
 	int n_dir;
+	double trans_pct_mean; /* |t_e - t_g| of the relative poses, % of |t_g| (steps > 1 mm) */
+	int n_pct;
+	/* mvod_frame_err e over the n + 1 frames: the first frame has no predecessor, e = 0 */
+	double err_avg, err_max;
 };
 
-/* Accumulates the RPE of one consecutive pair (estimate and ground truth, camera-to-world). */
+/* Accumulates the errors of one consecutive pair (estimate and ground truth, camera-to-world). */
 void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct mvod_pose *e1,
 		  const struct mvod_pose *g0, const struct mvod_pose *g1);
 void mvod_rpe_finish(struct mvod_rpe *acc);
+
+/*
+ * KITTI relative errors, as the official devkit (evaluate_odometry.cpp) computes them: from
+ * every 10th frame, a segment of each length L = 100, 200, ..., 800 m of ground-truth path ends
+ * at the first frame whose distance exceeds L (strictly); with dX = inv(X_first) X_last its error
+ * is P = inv(dE) dG, t_err = |t(P)| / L, r_err = angle(P) / L (L, not the segment's actual
+ * length, as the devkit does). Means over all segments of all lengths.
+ */
+struct mvod_kitti_rel {
+	int n_segments;        /* 0 when the ground-truth path is no longer than 100 m */
+	double t_rel_pct;      /* mean t_err, %; NAN without segments */
+	double r_rel_deg_100m; /* mean r_err, degrees per 100 m; NAN without segments */
+};
+/* dist: caller-owned scratch of n doubles (cumulative ground-truth distance). */
+void mvod_kitti_segments(const struct mvod_pose *est, const struct mvod_pose *gt, int n,
+			 double *dist, struct mvod_kitti_rel *out);
 
 #ifdef __cplusplus
 }

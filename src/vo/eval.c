@@ -75,12 +75,100 @@ double mvod_ate_rmse(const double *src, const double *dst, int n, const double R
 	return n ? sqrt(sum / n) : 0.0;
 }
 
+/* Below this a ground-truth step is a held or static frame: there is no step to compare with. */
+#define MIN_STEP_M 1e-3
+
+static double dist3(const double a[3], const double b[3])
+{
+	double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+	return mvod_vec3_norm(d);
+}
+
+/* Length of steps first .. first + k - 1 of a path, step i going from point i - 1 to point i. */
+static double path_len(const double *p, int first, int k)
+{
+	double len = 0;
+	for (int i = first; i < first + k; i++)
+		len += dist3(p + 3 * i, p + 3 * (i - 1));
+	return len;
+}
+
+int mvod_scale_drift(const double *est, const double *gt, int n, double *drift)
+{
+	if (n < 2)
+		return -EINVAL;
+	int k = (n - 1) / 10 > 1 ? (n - 1) / 10 : 1;
+	double e0 = path_len(est, 1, k), g0 = path_len(gt, 1, k);
+	double e1 = path_len(est, n - k, k), g1 = path_len(gt, n - k, k);
+	if (g0 <= MIN_STEP_M || g1 <= MIN_STEP_M || e0 <= 0)
+		return -EINVAL;
+	*drift = (e1 / g1) / (e0 / g0);
+	return 0;
+}
+
+double mvod_rot_euler_y(const double R[9])
+{
+	return atan2(-R[6], sqrt(R[0] * R[0] + R[3] * R[3]));
+}
+
+/*
+ * The world-frame step from a to b: dR = R_b R_a^T, dt = t_b - t_a. It is not the pose b a^-1
+ * (whose translation is t_b - dR t_a); the pose struct is only a container.
+ */
+static void world_step(const struct mvod_pose *a, const struct mvod_pose *b, struct mvod_pose *out)
+{
+	mvod_mat3_mul_bt(b->R, a->R, out->R);
+	for (int k = 0; k < 3; k++)
+		out->t[k] = b->t[k] - a->t[k];
+}
+
+void mvod_frame_err(const struct mvod_pose *e0, const struct mvod_pose *e1,
+		    const struct mvod_pose *g0, const struct mvod_pose *g1,
+		    struct mvod_frame_err *out)
+{
+	struct mvod_pose de, dg;
+	world_step(e0, e1, &de);
+	world_step(g0, g1, &dg);
+	double M[9], Rge[9], te[3];
+	mvod_mat3_mul_bt(de.R, dg.R, M);
+	out->r_deg = fabs(mvod_rot_euler_y(M)) * RAD2DEG;
+	/* The estimated step, carried into the ground truth's world by the current orientation error. */
+	mvod_mat3_mul_bt(g1->R, e1->R, Rge);
+	mvod_mat3_vec(Rge, de.t, te);
+	out->d_m = dist3(dg.t, te);
+	double s = out->r_deg + out->d_m;
+	out->e = s / (0.5 + s);
+}
+
 /* Relative motion from pose a to pose b, expressed in a's frame: a^-1 b. */
 static void relative(const struct mvod_pose *a, const struct mvod_pose *b, struct mvod_pose *out)
 {
 	struct mvod_pose ia;
 	mvod_pose_inverse(a, &ia);
 	mvod_pose_compose(&ia, b, out);
+}
+
+/* Mean fields hold sums until mvod_rpe_finish. */
+static void tally(double *sum, double *max, double v)
+{
+	*sum += v;
+	if (v > *max)
+		*max = v;
+}
+
+/* The translation terms of relative steps de (estimate) and dg (ground truth). */
+static void rpe_add_step(struct mvod_rpe *acc, const double de[3], const double dg[3])
+{
+	double step = mvod_vec3_norm(dg);
+	if (step <= MIN_STEP_M)
+		return;
+	acc->trans_pct_mean += 100 * dist3(de, dg) / step;
+	acc->n_pct++;
+	/* A held estimate (no step) has no direction; its error already shows as 100 % above. */
+	if (mvod_vec3_norm(de) > 1e-9) {
+		tally(&acc->dir_deg_mean, &acc->dir_deg_max, mvod_vec3_angle(de, dg) * RAD2DEG);
+		acc->n_dir++;
+	}
 }
 
 void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct mvod_pose *e1,
@@ -91,19 +179,12 @@ void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct
 	relative(g0, g1, &dg);
 	double dR[9];
 	mvod_mat3_mul_bt(de.R, dg.R, dR);
-	double rot = mvod_rot_angle(dR) * RAD2DEG;
-	acc->rot_deg_mean += rot;
-	if (rot > acc->rot_deg_max)
-		acc->rot_deg_max = rot;
+	tally(&acc->rot_deg_mean, &acc->rot_deg_max, mvod_rot_angle(dR) * RAD2DEG);
 	acc->n++;
-	/* Direction only where both steps are measurable (a held or static frame has none). */
-	if (mvod_vec3_norm(dg.t) > 1e-3 && mvod_vec3_norm(de.t) > 1e-9) {
-		double dir = mvod_vec3_angle(de.t, dg.t) * RAD2DEG;
-		acc->dir_deg_mean += dir;
-		if (dir > acc->dir_deg_max)
-			acc->dir_deg_max = dir;
-		acc->n_dir++;
-	}
+	rpe_add_step(acc, de.t, dg.t);
+	struct mvod_frame_err fe;
+	mvod_frame_err(e0, e1, g0, g1, &fe);
+	tally(&acc->err_avg, &acc->err_max, fe.e);
 }
 
 void mvod_rpe_finish(struct mvod_rpe *acc)
@@ -112,4 +193,51 @@ void mvod_rpe_finish(struct mvod_rpe *acc)
 		acc->rot_deg_mean /= acc->n;
 	if (acc->n_dir)
 		acc->dir_deg_mean /= acc->n_dir;
+	if (acc->n_pct)
+		acc->trans_pct_mean /= acc->n_pct;
+	acc->err_avg /= acc->n + 1;
+}
+
+static const double kitti_len_m[] = {100, 200, 300, 400, 500, 600, 700, 800};
+#define KITTI_LENGTHS ((int)(sizeof(kitti_len_m) / sizeof(kitti_len_m[0])))
+#define KITTI_STEP 10 /* frames between segment starts: one second of KITTI's 10 Hz */
+
+/* Adds one segment's translation and rotation error per metre of nominal length len. */
+static void kitti_add_segment(const struct mvod_pose *est, const struct mvod_pose *gt, int first,
+			      int last, double len, double sum[2])
+{
+	struct mvod_pose dg, de, err;
+	relative(&gt[first], &gt[last], &dg);
+	relative(&est[first], &est[last], &de);
+	relative(&de, &dg, &err);
+	sum[0] += mvod_vec3_norm(err.t) / len;
+	sum[1] += mvod_rot_angle(err.R) / len;
+}
+
+void mvod_kitti_segments(const struct mvod_pose *est, const struct mvod_pose *gt, int n,
+			 double *dist, struct mvod_kitti_rel *out)
+{
+	for (int i = 0; i < n; i++)
+		dist[i] = i ? dist[i - 1] + dist3(gt[i].t, gt[i - 1].t) : 0;
+	int last[KITTI_LENGTHS] = {0};
+	double sum[2] = {0, 0};
+	out->n_segments = 0;
+	for (int f = 0; f < n; f += KITTI_STEP)
+		for (int k = 0; k < KITTI_LENGTHS; k++) {
+			/*
+			 * The devkit's lastFrameFromSegmentLength, resumed where the previous start
+			 * left it: dist never decreases, so neither does the answer. Once a length
+			 * runs off the end, so do the longer ones.
+			 */
+			while (last[k] < n && !(dist[last[k]] > dist[f] + kitti_len_m[k]))
+				last[k]++;
+			if (last[k] == n)
+				break;
+			kitti_add_segment(est, gt, f, last[k], kitti_len_m[k], sum);
+			out->n_segments++;
+		}
+	/* NAN, not 0, when nothing was measured: a report must not show it as a perfect score. */
+	int m = out->n_segments;
+	out->t_rel_pct = m ? 100 * sum[0] / m : NAN;
+	out->r_rel_deg_100m = m ? 100 * RAD2DEG * sum[1] / m : NAN;
 }
