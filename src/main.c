@@ -291,8 +291,9 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 	if (!s->have_gt)
 		return;
 	printf("mvod: accuracy vs ground truth: rotation error %.3f deg/frame (max %.3f), "
-	       "direction error %.2f deg/frame (max %.2f), ",
-	       s->rpe.rot_deg_mean, s->rpe.rot_deg_max, s->rpe.dir_deg_mean, s->rpe.dir_deg_max);
+	       "direction error %.2f deg/frame (max %.2f), err_avg %.3f (max %.3f), ",
+	       s->rpe.rot_deg_mean, s->rpe.rot_deg_max, s->rpe.dir_deg_mean, s->rpe.dir_deg_max,
+	       s->rpe.err_avg, s->rpe.err_max);
 	if (isnan(s->ate_rmse_m))
 		printf("ATE n/a (the ground truth does not move)\n");
 	else

@@ -22,7 +22,7 @@ static int setup(void **state)
 {
 	(void)state;
 	snprintf(synth_dir, sizeof(synth_dir), "%s/seq", harness_tmpdir());
-	harness_synth(synth_dir, "forward", 5, "mkv");
+	harness_synth(synth_dir, "forward", 5, "mkv", NULL);
 	snprintf(video, sizeof(video), "file:%s/video.mkv", synth_dir);
 	snprintf(calib, sizeof(calib), "%s/calib.json", synth_dir);
 	snprintf(out, sizeof(out), "%s/out.tum", harness_tmpdir());
@@ -166,7 +166,7 @@ static void test_killed_run_leaves_complete_lines(void **state)
 	(void)state;
 	char dir[300], src[400], cal[400], traj[400];
 	snprintf(dir, sizeof(dir), "%s/long", harness_tmpdir());
-	harness_synth(dir, "forward", 200, "mkv");
+	harness_synth(dir, "forward", 200, "mkv", NULL);
 	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
 	snprintf(cal, sizeof(cal), "%s/calib.json", dir);
 	snprintf(traj, sizeof(traj), "%s/killed.kitti", dir);

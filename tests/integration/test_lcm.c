@@ -59,7 +59,7 @@ static int setup(void **state)
 {
 	(void)state;
 	snprintf(dir, sizeof(dir), "%s/seq", harness_tmpdir());
-	harness_synth(dir, "forward", FRAMES, "mkv");
+	harness_synth(dir, "forward", FRAMES, "mkv", NULL);
 	return 0;
 }
 
