@@ -284,9 +284,9 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 {
 	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held\n",
 	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held);
-	printf("mvod: mean ms per frame:");
+	printf("mvod: ms per frame, mean (max):");
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
-		printf(" %s %.2f", mvod_stage_names[k], s->stage_ms_mean[k]);
+		printf(" %s %.2f (%.1f)", mvod_stage_names[k], s->stage_ms_mean[k], s->stage_ms_max[k]);
 	printf("\n");
 	if (!s->have_gt)
 		return;

@@ -109,8 +109,6 @@ struct mvod_vo;
 int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		   struct mvod_vo **out);
 void mvod_vo_destroy(struct mvod_vo *vo);
-/* The pinhole camera the frontend sees (after undistortion and resize). */
-void mvod_vo_camera(const struct mvod_vo *vo, struct mvod_camera *cam);
 
 /*
  * Processes one frame. gt_position: this frame's ground-truth camera position in metres,

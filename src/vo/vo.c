@@ -70,8 +70,7 @@ struct keyframe {
 	double *pts; /* cap * 3: point in this camera's frame, absolute units */
 	uint8_t *has_pt;
 	struct mvod_pose pose; /* camera-to-world */
-	double gt[3];
-	int have_gt;
+	double gt[3]; /* ground-truth position, with --scale gt */
 };
 
 struct mvod_vo {
@@ -190,11 +189,6 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	free(vo);
 }
 
-void mvod_vo_camera(const struct mvod_vo *vo, struct mvod_camera *cam)
-{
-	*cam = vo->cam;
-}
-
 /* The current frame becomes the reference; its structure is what the next step scales against. */
 static void promote(struct mvod_vo *vo, const double *gt)
 {
@@ -202,7 +196,6 @@ static void promote(struct mvod_vo *vo, const double *gt)
 	vo->ref = vo->cur;
 	vo->cur = k;
 	vo->ref->pose = vo->pose;
-	vo->ref->have_gt = gt != NULL;
 	if (gt)
 		memcpy(vo->ref->gt, gt, sizeof(vo->ref->gt));
 	vo->have_ref = 1;
