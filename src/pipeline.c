@@ -204,9 +204,7 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 		mvod_path_add(&r->gt_path, gt->t);
 		if (r->prev_had_gt) {
 			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
-			double d[3] = {gt->t[0] - r->prev_gt.t[0], gt->t[1] - r->prev_gt.t[1],
-				       gt->t[2] - r->prev_gt.t[2]};
-			s->path_len_m += mvod_vec3_norm(d);
+			s->path_len_m += mvod_vec3_dist(gt->t, r->prev_gt.t);
 		}
 		r->prev_gt = *gt;
 	}

@@ -27,6 +27,8 @@ void mvod_mat3_mul_at(const double A[9], const double B[9], double C[9]); /* C =
 void mvod_mat3_vec(const double A[9], const double v[3], double out[3]);
 void mvod_mat3_tvec(const double A[9], const double v[3], double out[3]); /* A^T v */
 double mvod_vec3_norm(const double v[3]);
+double mvod_vec3_dist(const double a[3], const double b[3]);
+double mvod_mat3_det(const double A[9]);
 
 /* Unit quaternion q = (w, x, y, z) with w >= 0, from a rotation matrix (Shepperd's method). */
 void mvod_rot_to_quat(const double R[9], double q[4]);

@@ -59,6 +59,18 @@ double mvod_vec3_norm(const double v[3])
 	return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
+double mvod_vec3_dist(const double a[3], const double b[3])
+{
+	double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+	return mvod_vec3_norm(d);
+}
+
+double mvod_mat3_det(const double A[9])
+{
+	return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
+	       A[2] * (A[3] * A[7] - A[4] * A[6]);
+}
+
 void mvod_pose_compose(const struct mvod_pose *a, const struct mvod_pose *b, struct mvod_pose *out)
 {
 	struct mvod_pose r;

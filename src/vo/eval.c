@@ -4,15 +4,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "cv_shim.h"
+#include "motion.h"
 
 #define RAD2DEG (180.0 / M_PI)
-
-static double det3(const double A[9])
-{
-	return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
-	       A[2] * (A[3] * A[7] - A[4] * A[6]);
-}
 
 static void centroid(const double *p, int n, double c[3])
 {
@@ -43,16 +37,11 @@ int mvod_umeyama(const double *src, const double *dst, int n, bool with_scale, d
 	}
 	if (var < 1e-18)
 		return -EINVAL;
-	double U[9], D[3], Vt[9];
-	int ret = mvod_cv_svd3(C, U, D, Vt);
+	double trace;
+	int ret = mvod_nearest_rotation(C, R, &trace);
 	if (ret)
 		return ret;
-	double S[3] = {1, 1, det3(U) * det3(Vt) < 0 ? -1 : 1};
-	for (int r = 0; r < 3; r++)
-		for (int c = 0; c < 3; c++)
-			R[3 * r + c] = U[3 * r] * S[0] * Vt[c] + U[3 * r + 1] * S[1] * Vt[3 + c] +
-				       U[3 * r + 2] * S[2] * Vt[6 + c];
-	*s = with_scale ? (D[0] * S[0] + D[1] * S[1] + D[2] * S[2]) / var : 1.0;
+	*s = with_scale ? trace / var : 1.0;
 	double Rm[3];
 	mvod_mat3_vec(R, ms, Rm);
 	for (int k = 0; k < 3; k++)
@@ -78,18 +67,12 @@ double mvod_ate_rmse(const double *src, const double *dst, int n, const double R
 /* Below this a ground-truth step is a held or static frame: there is no step to compare with. */
 #define MIN_STEP_M 1e-3
 
-static double dist3(const double a[3], const double b[3])
-{
-	double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-	return mvod_vec3_norm(d);
-}
-
 /* Length of steps first .. first + k - 1 of a path, step i going from point i - 1 to point i. */
 static double path_len(const double *p, int first, int k)
 {
 	double len = 0;
 	for (int i = first; i < first + k; i++)
-		len += dist3(p + 3 * i, p + 3 * (i - 1));
+		len += mvod_vec3_dist(p + 3 * i, p + 3 * (i - 1));
 	return len;
 }
 
@@ -135,7 +118,7 @@ void mvod_frame_err(const struct mvod_pose *e0, const struct mvod_pose *e1,
 	/* The estimated step, carried into the ground truth's world by the current orientation error. */
 	mvod_mat3_mul_bt(g1->R, e1->R, Rge);
 	mvod_mat3_vec(Rge, de.t, te);
-	out->d_m = dist3(dg.t, te);
+	out->d_m = mvod_vec3_dist(dg.t, te);
 	double s = out->r_deg + out->d_m;
 	out->e = s / (0.5 + s);
 }
@@ -162,7 +145,7 @@ static void rpe_add_step(struct mvod_rpe *acc, const double de[3], const double 
 	double step = mvod_vec3_norm(dg);
 	if (step <= MIN_STEP_M)
 		return;
-	acc->trans_pct_mean += 100 * dist3(de, dg) / step;
+	acc->trans_pct_mean += 100 * mvod_vec3_dist(de, dg) / step;
 	acc->n_pct++;
 	/* A held estimate (no step) has no direction; its error already shows as 100 % above. */
 	if (mvod_vec3_norm(de) > 1e-9) {
@@ -218,7 +201,7 @@ void mvod_kitti_segments(const struct mvod_pose *est, const struct mvod_pose *gt
 			 double *dist, struct mvod_kitti_rel *out)
 {
 	for (int i = 0; i < n; i++)
-		dist[i] = i ? dist[i - 1] + dist3(gt[i].t, gt[i - 1].t) : 0;
+		dist[i] = i ? dist[i - 1] + mvod_vec3_dist(gt[i].t, gt[i - 1].t) : 0;
 	int last[KITTI_LENGTHS] = {0};
 	double sum[2] = {0, 0};
 	out->n_segments = 0;

@@ -104,12 +104,6 @@ double mvod_median(double *v, int n)
 	return v[k];
 }
 
-static double dist3(const double *a, const double *b)
-{
-	double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-	return mvod_vec3_norm(d);
-}
-
 int mvod_motion_relative_scale(const double *prev, const double *cur, int n, int min_pairs,
 			       double *scratch, double *s)
 {
@@ -117,8 +111,8 @@ int mvod_motion_relative_scale(const double *prev, const double *cur, int n, int
 	int half = n / 2, m = 0;
 	for (int i = 0; i < half; i++) {
 		int j = i + half;
-		double dc = dist3(cur + 3 * i, cur + 3 * j);
-		double dp = dist3(prev + 3 * i, prev + 3 * j);
+		double dc = mvod_vec3_dist(cur + 3 * i, cur + 3 * j);
+		double dp = mvod_vec3_dist(prev + 3 * i, prev + 3 * j);
 		if (dc > 1e-9 && dp > 1e-9 && isfinite(dc) && isfinite(dp))
 			scratch[m++] = dp / dc;
 	}
@@ -128,17 +122,28 @@ int mvod_motion_relative_scale(const double *prev, const double *cur, int n, int
 	return 0;
 }
 
-static double det3(const double A[9])
+int mvod_nearest_rotation(const double C[9], double R[9], double *trace)
 {
-	return A[0] * (A[4] * A[8] - A[5] * A[7]) - A[1] * (A[3] * A[8] - A[5] * A[6]) +
-	       A[2] * (A[3] * A[7] - A[4] * A[6]);
+	/* C = U D V^T; R = U S V^T with S = diag(1, 1, +-1) so that R is a rotation, never a mirror. */
+	double U[9], D[3], Vt[9];
+	int ret = mvod_cv_svd3(C, U, D, Vt);
+	if (ret)
+		return ret;
+	double S[3] = {1, 1, mvod_mat3_det(U) * mvod_mat3_det(Vt) < 0 ? -1 : 1};
+	for (int r = 0; r < 3; r++)
+		for (int c = 0; c < 3; c++)
+			R[3 * r + c] = U[3 * r] * S[0] * Vt[c] + U[3 * r + 1] * S[1] * Vt[3 + c] +
+				       U[3 * r + 2] * S[2] * Vt[6 + c];
+	if (trace)
+		*trace = D[0] * S[0] + D[1] * S[1] + D[2] * S[2];
+	return 0;
 }
 
 int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t *mask, int n,
 			      double R[9])
 {
-	/* Kabsch: H = sum b1 b2^T, R = V diag(1, 1, det) U^T maps bearings of 1 onto 2. */
-	double H[9] = {0};
+	/* Kabsch on unit bearings: C = sum b2 b1^T. */
+	double C[9] = {0};
 	int used = 0;
 	for (int i = 0; i < n; i++) {
 		if (!mask[i])
@@ -147,27 +152,12 @@ int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t 
 		double n1 = mvod_vec3_norm(b1), n2 = mvod_vec3_norm(b2);
 		for (int r = 0; r < 3; r++)
 			for (int c = 0; c < 3; c++)
-				H[3 * r + c] += (b1[r] / n1) * (b2[c] / n2);
+				C[3 * r + c] += (b2[r] / n2) * (b1[c] / n1);
 		used++;
 	}
 	if (used < 2)
 		return -EINVAL;
-	double U[9], S[3], Vt[9];
-	int ret = mvod_cv_svd3(H, U, S, Vt);
-	if (ret)
-		return ret;
-	/* V = Vt^T, so (V D U^T)[r][c] = sum_k Vt[k][r] D[k] U[c][k]. */
-	double D[3] = {1, 1, 1};
-	for (int pass = 0; pass < 2; pass++) {
-		for (int r = 0; r < 3; r++)
-			for (int c = 0; c < 3; c++)
-				R[3 * r + c] = Vt[r] * D[0] * U[3 * c] + Vt[3 + r] * D[1] * U[3 * c + 1] +
-					       Vt[6 + r] * D[2] * U[3 * c + 2];
-		if (det3(R) > 0)
-			break;
-		D[2] = -1; /* a reflection: flip the weakest axis */
-	}
-	return 0;
+	return mvod_nearest_rotation(C, R, NULL);
 }
 
 double mvod_motion_rotation_residual(const double R[9], const double x1[2], const double x2[2])

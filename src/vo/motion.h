@@ -60,6 +60,12 @@ double mvod_median(double *v, int n);
 int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t *mask, int n,
 			      double R[9]);
 
+/*
+ * The rotation R maximising trace(R^T C) for a correlation C = sum dst src^T (Kabsch and
+ * Umeyama share it), with trace = trace(D S) of the SVD for Umeyama's scale (may be NULL).
+ */
+int mvod_nearest_rotation(const double C[9], double R[9], double *trace);
+
 /* Distance in the normalised image plane between R x1 (projected) and x2; INFINITY behind. */
 double mvod_motion_rotation_residual(const double R[9], const double x1[2], const double x2[2]);
 

@@ -250,9 +250,8 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 			  enum mvod_scale_source *src)
 {
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT) {
-		double d[3] = {gt[0] - vo->ref->gt[0], gt[1] - vo->ref->gt[1], gt[2] - vo->ref->gt[2]};
 		*src = MVOD_SCALE_GROUND_TRUTH;
-		return mvod_vec3_norm(d);
+		return mvod_vec3_dist(gt, vo->ref->gt);
 	}
 	double s;
 	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {

@@ -152,9 +152,7 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 			e->max_translation = tn;
 		if (i > 0) {
 			mvod_rpe_add(&e->rpe, &est.pose[i - 1], &est.pose[i], &gt.pose[i - 1], &gt.pose[i]);
-			double d[3] = {pg[3 * i] - pg[3 * i - 3], pg[3 * i + 1] - pg[3 * i - 2],
-				       pg[3 * i + 2] - pg[3 * i - 1]};
-			e->length_m += mvod_vec3_norm(d);
+			e->length_m += mvod_vec3_dist(gt.pose[i].t, gt.pose[i - 1].t);
 		}
 	}
 	mvod_rpe_finish(&e->rpe);
