@@ -1,17 +1,15 @@
 #include "mvod/calib.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
-#include <unistd.h>
 
 #include <cjson/cJSON.h>
 
+#include "util/atomic_file.h"
 #include "util/errbuf.h"
 
 /* Calibration files are small; anything bigger is not one. */
@@ -276,48 +274,6 @@ static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_cal
 	return root;
 }
 
-/* Writes all of buf to a temporary file beside path, then renames it over path. */
-static int write_replace(const char *path, const char *buf, size_t len)
-{
-	char tmp[4096];
-	if (snprintf(tmp, sizeof(tmp), "%s.tmp-XXXXXX", path) >= (int)sizeof(tmp))
-		return -ENAMETOOLONG;
-	int fd = mkstemp(tmp);
-	if (fd < 0)
-		return -errno;
-	int ret = 0;
-	for (size_t off = 0; off < len;) {
-		ssize_t w = write(fd, buf + off, len - off);
-		if (w < 0 && errno == EINTR)
-			continue;
-		if (w < 0) {
-			ret = -errno;
-			goto fail;
-		}
-		off += (size_t)w;
-	}
-	if (fchmod(fd, 0644) != 0 || fsync(fd) != 0) {
-		ret = -errno;
-		goto fail;
-	}
-	if (close(fd) != 0) {
-		fd = -1;
-		ret = -errno;
-		goto fail;
-	}
-	fd = -1;
-	if (rename(tmp, path) != 0) {
-		ret = -errno;
-		goto fail;
-	}
-	return 0;
-fail:
-	if (fd >= 0)
-		close(fd);
-	unlink(tmp);
-	return ret;
-}
-
 int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struct mvod_calib_meta *meta)
 {
 	cJSON *root = calib_to_json(cam, meta);
@@ -328,7 +284,6 @@ int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struc
 	if (!text)
 		return -ENOMEM;
 	size_t len = strlen(text);
-	text[len] = '\0';
 	char *withnl = realloc(text, len + 2);
 	if (!withnl) {
 		free(text);
@@ -336,7 +291,7 @@ int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struc
 	}
 	withnl[len] = '\n';
 	withnl[len + 1] = '\0';
-	int ret = write_replace(path, withnl, len + 1);
+	int ret = mvod_write_replace(path, withnl, len + 1);
 	free(withnl);
 	return ret;
 }

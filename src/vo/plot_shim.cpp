@@ -1,7 +1,6 @@
 #include "mvod/plot.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -9,13 +8,11 @@
 #include <string>
 #include <vector>
 
-#include <fcntl.h>
-#include <unistd.h>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "util/atomic_file.h"
 #include "util/shim_guard.hpp"
 
 namespace {
@@ -400,70 +397,6 @@ std::string extension_of(const std::string &path)
 	return dot == std::string::npos || dot <= base ? std::string() : path.substr(dot);
 }
 
-/* "dir/.name.tmp-PID-N.png": same directory (rename is atomic) and extension as the target. */
-std::string temp_name(const std::string &path, const std::string &ext, unsigned n)
-{
-	size_t slash = path.rfind('/');
-	size_t base = slash == std::string::npos ? 0 : slash + 1;
-	std::string stem = path.substr(base, path.size() - base - ext.size());
-	return path.substr(0, base) + "." + stem + ".tmp-" + std::to_string(getpid()) + "-" +
-	       std::to_string(n) + ext;
-}
-
-/* O_EXCL with a fresh name on collision; creating with 0666 lets the umask apply. */
-int open_temp(const std::string &path, const std::string &ext, std::string &tmp)
-{
-	static std::atomic<unsigned> counter{0};
-	for (int attempt = 0; attempt < 100; attempt++) {
-		tmp = temp_name(path, ext, counter++);
-		int fd = open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-		if (fd >= 0 || errno != EEXIST)
-			return fd >= 0 ? fd : -errno;
-	}
-	return -EEXIST;
-}
-
-int write_all(int fd, const std::vector<uchar> &data)
-{
-	size_t done = 0;
-	while (done < data.size()) {
-		ssize_t w = write(fd, data.data() + done, data.size() - done);
-		if (w < 0 && errno == EINTR)
-			continue;
-		if (w < 0)
-			return -errno;
-		done += (size_t)w;
-	}
-	return 0;
-}
-
-/* The PNG appears complete under its name or not at all, even after a crash or power cut. */
-int write_atomic(const std::string &path, const std::string &ext, const std::vector<uchar> &data)
-{
-	std::string tmp;
-	int ret = open_temp(path, ext, tmp);
-	if (ret < 0)
-		return ret;
-	int fd = ret;
-
-	ret = write_all(fd, data);
-	if (ret == 0 && fsync(fd) < 0)
-		ret = -errno;
-	if (close(fd) < 0 && ret == 0)
-		ret = -errno;
-	if (ret < 0)
-		goto err_unlink;
-	if (rename(tmp.c_str(), path.c_str()) < 0) {
-		ret = -errno;
-		goto err_unlink;
-	}
-	return 0;
-
-err_unlink:
-	unlink(tmp.c_str());
-	return ret;
-}
-
 int plot_topdown(const char *path, const char *title, const Path &est, const double *heading,
 		 const Path &gt)
 {
@@ -474,7 +407,7 @@ int plot_topdown(const char *path, const char *title, const Path &est, const dou
 	std::vector<uchar> png;
 	if (!cv::imencode(ext, render(title, est, heading, gt), png))
 		return -EIO;
-	return write_atomic(path, ext, png);
+	return mvod_write_replace(path, png.data(), png.size());
 }
 
 } // namespace
