@@ -1,6 +1,7 @@
 #include "mvod/pipeline.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -49,15 +50,22 @@ static double now_s(void)
 	return (double)ts.tv_sec + ts.tv_nsec / 1e9;
 }
 
+/* Resident set size in KiB; read with read(2) into the stack, since stdio would malloc. */
 static int64_t rss_kb(void)
 {
-	long pages = 0, resident = 0;
-	FILE *f = fopen("/proc/self/statm", "r");
-	if (!f)
+	char buf[128];
+	int fd = open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
 		return -1;
-	int ok = fscanf(f, "%ld %ld", &pages, &resident) == 2;
-	fclose(f);
-	return ok ? resident * (sysconf(_SC_PAGESIZE) / 1024) : -1;
+	ssize_t n = read(fd, buf, sizeof(buf) - 1);
+	close(fd);
+	long pages, resident;
+	if (n <= 0)
+		return -1;
+	buf[n] = '\0';
+	if (sscanf(buf, "%ld %ld", &pages, &resident) != 2)
+		return -1;
+	return resident * (sysconf(_SC_PAGESIZE) / 1024);
 }
 
 static int open_camera(struct run *r)
