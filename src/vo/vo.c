@@ -189,9 +189,14 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	free(vo);
 }
 
-/* The current frame becomes the reference; its structure is what the next step scales against. */
-static void promote(struct mvod_vo *vo, const double *gt)
+/*
+ * The current frame becomes the reference. Its structure (from a motion step) is what the next
+ * step scales against; without one, the next step falls back to constant speed.
+ */
+static void promote(struct mvod_vo *vo, const double *gt, bool with_structure)
 {
+	if (!with_structure)
+		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
 	struct keyframe *k = vo->ref;
 	vo->ref = vo->cur;
 	vo->cur = k;
@@ -357,19 +362,17 @@ static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *
 	enum mvod_frame_status st = res->status;
 	if (st == MVOD_FRAME_MOTION) {
 		vo->state = MVOD_STATE_TRACKING;
-		promote(vo, gt);
+		promote(vo, gt, true);
 	} else if (st == MVOD_FRAME_ROTATION) {
 		/* Keep the reference while it still overlaps well, so parallax can build up. */
-		if (res->matches < 2 * vo->p.min_matches) {
-			memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
-			promote(vo, gt);
-		}
+		if (res->matches < 2 * vo->p.min_matches)
+			promote(vo, gt, false);
 	} else if (st != MVOD_FRAME_FEW_FEATURES) {
-		/* Not trackable against the reference, but rich enough to start again from. */
+		/* The first frame, or one not trackable against the reference but rich enough to
+		 * start again from. */
 		if (vo->state == MVOD_STATE_TRACKING)
 			vo->state = MVOD_STATE_LOST;
-		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
-		promote(vo, gt);
+		promote(vo, gt, false);
 	} else if (vo->state == MVOD_STATE_TRACKING) {
 		vo->state = MVOD_STATE_LOST;
 	}
@@ -407,12 +410,7 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
 	double t3 = now_ms();
 	if (res->status == MVOD_FRAME_FEW_MATCHES && res->matches >= vo->p.min_matches)
 		res->status = estimate(vo, gt_position, res);
-	if (res->status == MVOD_FRAME_FIRST) {
-		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
-		promote(vo, gt_position);
-	} else {
-		settle(vo, gt_position, res);
-	}
+	settle(vo, gt_position, res);
 	double t4 = now_ms();
 	res->pose = vo->pose;
 	res->state = vo->state;
