@@ -1,0 +1,258 @@
+/* Option parsing shared by the subcommands. */
+#include "cli/cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mvod/capture.h"
+#include "mvod/log.h"
+
+const char *cli_prog = "mvod";
+
+/* Input and VO options: mvod run and mvod bench. */
+static const struct option run_opts[] = {
+	{"source", required_argument, NULL, CLI_OPT_SOURCE},
+	{"calib", required_argument, NULL, CLI_OPT_CALIB},
+	{"gt", required_argument, NULL, CLI_OPT_GT},
+	{"max-frames", required_argument, NULL, CLI_OPT_MAX_FRAMES},
+	{"scale", required_argument, NULL, CLI_OPT_SCALE},
+	{"features", required_argument, NULL, CLI_OPT_FEATURES},
+	{"ratio", required_argument, NULL, CLI_OPT_RATIO},
+	{"no-cross-check", no_argument, NULL, CLI_OPT_NO_CROSS},
+	{"robust", required_argument, NULL, CLI_OPT_ROBUST},
+	{"ransac-px", required_argument, NULL, CLI_OPT_RANSAC_PX},
+	{"confidence", required_argument, NULL, CLI_OPT_CONFIDENCE},
+	{"min-parallax", required_argument, NULL, CLI_OPT_MIN_PARALLAX},
+	{"resize", required_argument, NULL, CLI_OPT_RESIZE},
+	{"blur", required_argument, NULL, CLI_OPT_BLUR},
+	{NULL, 0, NULL, 0},
+};
+
+/* Every subcommand. */
+static const struct option general_opts[] = {
+	{"log-level", required_argument, NULL, CLI_OPT_LOG_LEVEL},
+	{"quiet", no_argument, NULL, 'q'},
+	{"help", no_argument, NULL, 'h'},
+	{"version", no_argument, NULL, CLI_OPT_VERSION},
+	{NULL, 0, NULL, 0},
+};
+
+static int append(struct option *dst, int n, const struct option *src)
+{
+	for (const struct option *o = src; o && o->name && n < CLI_MAX_OPTIONS - 1; o++)
+		dst[n++] = *o;
+	return n;
+}
+
+void cli_options_join(struct option *dst, bool with_run, const struct option *own)
+{
+	int n = append(dst, 0, general_opts);
+	if (with_run)
+		n = append(dst, n, run_opts);
+	n = append(dst, n, own);
+	dst[n] = (struct option){0};
+}
+
+int cli_bad_value(const char *opt, const char *val, const char *want)
+{
+	fprintf(stderr, "%s: --%s %s: expected %s\n", cli_prog, opt, val, want);
+	return -EINVAL;
+}
+
+int cli_parse_double(const char *opt, const char *s, double lo, double hi, double *out)
+{
+	char *end;
+	errno = 0;
+	double v = strtod(s, &end);
+	if (errno || end == s || *end || !isfinite(v) || v < lo || v > hi) {
+		char want[96];
+		snprintf(want, sizeof(want), "a number in [%g, %g]", lo, hi);
+		return cli_bad_value(opt, s, want);
+	}
+	*out = v;
+	return 0;
+}
+
+int cli_parse_int(const char *opt, const char *s, long lo, long hi, long *out)
+{
+	char *end;
+	errno = 0;
+	long v = strtol(s, &end, 10);
+	if (errno || end == s || *end || v < lo || v > hi) {
+		char want[96];
+		snprintf(want, sizeof(want), "an integer in [%ld, %ld]", lo, hi);
+		return cli_bad_value(opt, s, want);
+	}
+	*out = v;
+	return 0;
+}
+
+bool cli_has_suffix(const char *s, const char *suffix)
+{
+	size_t n = strlen(s), m = strlen(suffix);
+	return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+void cli_usage_input(FILE *out)
+{
+	fprintf(out,
+"Input:\n"
+"  --source URI          where frames come from (required):\n");
+	for (int i = 0; mvod_source_backends[i]; i++)
+		fprintf(out, "                          %-8s %s\n", mvod_source_backends[i]->scheme,
+			mvod_source_backends[i]->summary);
+	fprintf(out,
+"  --calib FILE          camera calibration: mvod JSON (mvod-calibration/1) or KITTI\n"
+"                        calib.txt; not needed for kitti: sources (they carry P0)\n"
+"  --gt FILE             ground-truth trajectory, TUM or KITTI (matched by timestamp or\n"
+"                        by index); enables the accuracy summary and the GT path in --plot\n"
+"  --max-frames N        stop after N frames (default: the whole source)\n"
+"\n");
+}
+
+void cli_usage_vo(FILE *out)
+{
+	fprintf(out,
+"Visual odometry:\n"
+"  --scale auto|gt       step length from triangulated structure (auto, default; the first\n"
+"                        step defines the unit) or from the ground truth (gt: benchmarking)\n"
+"  --features N          ORB feature cap (default 2000)\n"
+"  --ratio R             Lowe's ratio test threshold, 1 = off (default 0.8)\n"
+"  --no-cross-check      keep matches that are not mutual best matches\n"
+"  --robust magsac|ransac  robust estimator of the essential matrix: MAGSAC++ (default)\n"
+"                        or classic RANSAC\n"
+"  --ransac-px P         inlier threshold in pixels (MAGSAC: its upper bound; default 1.0)\n"
+"  --confidence C        RANSAC confidence (default 0.999)\n"
+"  --min-parallax P      rotation-compensated median flow in pixels below which a frame is\n"
+"                        treated as rotation only (default 1.0)\n"
+"  --resize F            scale images by F in (0,1] before tracking (default 1)\n"
+"  --blur K              Gaussian blur with a KxK kernel, K odd, 0 = off (default 0)\n"
+"\n");
+}
+
+void cli_usage_general(FILE *out)
+{
+	fprintf(out,
+"General:\n"
+"  --log-level LEVEL     error, warn, info (default) or debug\n"
+"  -q, --quiet           same as --log-level warn, and no summary\n"
+"  -h, --help            this text\n"
+"  --version             print the version\n"
+"\n");
+}
+
+static int parse_vo_option(int id, const char *arg, struct mvod_vo_params *vo)
+{
+	long v = 0;
+	int ret = 0;
+	switch (id) {
+	case CLI_OPT_SCALE:
+		if (strcmp(arg, "auto") == 0)
+			vo->scale_mode = MVOD_SCALE_MODE_AUTO;
+		else if (strcmp(arg, "gt") == 0)
+			vo->scale_mode = MVOD_SCALE_MODE_GT;
+		else
+			ret = cli_bad_value("scale", arg, "auto or gt");
+		return ret;
+	case CLI_OPT_FEATURES:
+		ret = cli_parse_int("features", arg, 50, 100000, &v);
+		vo->max_features = (int)v;
+		return ret;
+	case CLI_OPT_RATIO:
+		return cli_parse_double("ratio", arg, 0.1, 1.0, &vo->ratio);
+	case CLI_OPT_NO_CROSS:
+		vo->cross_check = false;
+		return 0;
+	case CLI_OPT_ROBUST:
+		return mvod_robust_method_parse(arg, &vo->robust)
+			       ? cli_bad_value("robust", arg, "magsac or ransac")
+			       : 0;
+	case CLI_OPT_RANSAC_PX:
+		return cli_parse_double("ransac-px", arg, 0.05, 50, &vo->ransac_px);
+	case CLI_OPT_CONFIDENCE:
+		return cli_parse_double("confidence", arg, 0.5, 0.999999, &vo->ransac_conf);
+	case CLI_OPT_MIN_PARALLAX:
+		return cli_parse_double("min-parallax", arg, 0, 100, &vo->min_parallax_px);
+	case CLI_OPT_RESIZE:
+		return cli_parse_double("resize", arg, 0.05, 1, &vo->resize);
+	case CLI_OPT_BLUR:
+		ret = cli_parse_int("blur", arg, 0, 99, &v);
+		if (!ret && v != 0 && v % 2 == 0)
+			ret = cli_bad_value("blur", arg, "an odd kernel size, or 0");
+		vo->blur_ksize = (int)v;
+		return ret;
+	}
+	return -ENOENT;
+}
+
+int cli_parse_shared(int id, const char *arg, struct mvod_run_opts *o, int *quiet)
+{
+	long v;
+	switch (id) {
+	case CLI_OPT_SOURCE: o->source = arg; return 0;
+	case CLI_OPT_CALIB: o->calib = arg; return 0;
+	case CLI_OPT_GT: o->gt = arg; return 0;
+	case CLI_OPT_MAX_FRAMES:
+		if (cli_parse_int("max-frames", arg, 1, 1L << 40, &v))
+			return -EINVAL;
+		o->max_frames = v;
+		return 0;
+	case CLI_OPT_LOG_LEVEL: {
+		enum mvod_log_level lvl;
+		if (mvod_log_parse_level(arg, &lvl))
+			return cli_bad_value("log-level", arg, "error, warn, info or debug");
+		mvod_log_set_level(lvl);
+		return 0;
+	}
+	case 'q':
+		*quiet = 1;
+		mvod_log_set_level(MVOD_LOG_WARN);
+		return 0;
+	}
+	return parse_vo_option(id, arg, &o->vo);
+}
+
+int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
+	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet)
+{
+	struct option opts[CLI_MAX_OPTIONS];
+	cli_options_join(opts, o != NULL, own);
+	struct mvod_run_opts unused;
+	if (!o)
+		o = &unused;
+	int id;
+	opterr = 0;
+	optind = 1;
+	while ((id = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
+		if (id == 'h') {
+			usage(stdout);
+			return 1;
+		}
+		if (id == CLI_OPT_VERSION) {
+			printf("mvod %s\n", MVOD_VERSION);
+			return 1;
+		}
+		if (id == '?') {
+			fprintf(stderr, "%s: unknown or incomplete option '%s'; see %s --help\n",
+				cli_prog, argv[optind - 1], cli_prog);
+			return -EINVAL;
+		}
+		int ret = id >= CLI_OPT_OWN && own_parse ? own_parse(id, optarg, ctx)
+							   : cli_parse_shared(id, optarg, o, quiet);
+		if (ret == -ENOENT) {
+			fprintf(stderr, "%s: option '%s' does not apply here; see %s --help\n",
+				cli_prog, argv[optind - 1], cli_prog);
+			return -EINVAL;
+		}
+		if (ret)
+			return -EINVAL;
+	}
+	if (optind < argc) {
+		fprintf(stderr, "%s: unexpected argument '%s'; see %s --help\n", cli_prog,
+			argv[optind], cli_prog);
+		return -EINVAL;
+	}
+	return 0;
+}
