@@ -1,0 +1,124 @@
+/* Board specs: every field's malformation, the geometry, and the drawn pattern. */
+#include <errno.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "mvod/board.h"
+
+static void charuco_spec_round_trips(void **state)
+{
+	(void)state;
+	struct mvod_board b;
+	char err[256], back[128];
+	assert_int_equal(mvod_board_parse("charuco:5x7:0.04:0.02:DICT_6X6_250", &b, err, sizeof(err)), 0);
+	assert_int_equal(b.kind, MVOD_BOARD_CHARUCO);
+	assert_int_equal(b.cols, 5);
+	assert_int_equal(b.rows, 7);
+	assert_true(b.square_m == 0.04 && b.marker_m == 0.02);
+	assert_int_equal(b.dict, 10); /* cv::aruco::DICT_6X6_250 */
+	assert_int_equal(mvod_board_corner_count(&b), 4 * 6);
+	mvod_board_format(&b, back, sizeof(back));
+	assert_string_equal(back, "charuco:5x7:0.04:0.02:DICT_6X6_250");
+}
+
+static void chessboard_geometry(void **state)
+{
+	(void)state;
+	struct mvod_board b;
+	char err[256];
+	assert_int_equal(mvod_board_parse("chessboard:9x6:0.025", &b, err, sizeof(err)), 0);
+	assert_int_equal(mvod_board_corner_count(&b), 54);
+	int across, down;
+	mvod_board_squares(&b, &across, &down);
+	assert_int_equal(across, 10);
+	assert_int_equal(down, 7);
+	double p[3];
+	mvod_board_corner(&b, 0, p);
+	assert_true(p[0] == 0.025 && p[1] == 0.025 && p[2] == 0);
+	mvod_board_corner(&b, 10, p); /* second row, second column */
+	assert_true(p[0] == 0.05 && p[1] == 0.05);
+}
+
+static void malformed_specs_say_what_is_wrong(void **state)
+{
+	(void)state;
+	static const struct {
+		const char *spec, *says;
+	} cases[] = {
+		{"", "unknown board type"},
+		{"aruco:5x7:0.04", "unknown board type"},
+		{"charuco:5x7:0.04:0.02", "4 fields"},
+		{"charuco:5x7:0.04:0.02:DICT_6X6_250:x", "4 fields"},
+		{"charuco:5by7:0.04:0.02:DICT_6X6_250", "COLSxROWS"},
+		{"charuco:1x7:0.04:0.02:DICT_6X6_250", "COLSxROWS"},
+		{"charuco:5x7:-1:0.02:DICT_6X6_250", "square side"},
+		{"charuco:5x7:0.04:0.05:DICT_6X6_250", "smaller than the square"},
+		{"charuco:5x7:0.04:0.02:DICT_9X9_1", "unknown ArUco dictionary"},
+		{"charuco:20x20:0.04:0.02:DICT_4X4_50", "use a larger dictionary"},
+		{"chessboard:9x6", "2 fields"},
+		{"chessboard:9x6:abc", "square side"},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		struct mvod_board b;
+		char err[512] = "";
+		assert_int_equal(mvod_board_parse(cases[i].spec, &b, err, sizeof(err)), -EINVAL);
+		if (!strstr(err, cases[i].says))
+			fail_msg("'%s': '%s' does not say '%s'", cases[i].spec, err, cases[i].says);
+	}
+}
+
+/* The chessboard is drawn square by square: the top-left square black, then alternating. */
+static void chessboard_drawing(void **state)
+{
+	(void)state;
+	struct mvod_board b;
+	char err[256];
+	assert_int_equal(mvod_board_parse("chessboard:3x2:0.03", &b, err, sizeof(err)), 0);
+	struct mvod_image img;
+	assert_int_equal(mvod_board_draw(&b, 10, 5, &img), 0);
+	assert_int_equal(img.w, 4 * 10 + 10);
+	assert_int_equal(img.h, 3 * 10 + 10);
+	assert_int_equal(img.data[0], 255);                      /* margin */
+	assert_int_equal(img.data[(5 + 5) * img.stride + 5 + 5], 0);   /* square (0,0) */
+	assert_int_equal(img.data[(5 + 5) * img.stride + 15 + 5], 255); /* square (1,0) */
+	assert_int_equal(img.data[(15 + 5) * img.stride + 15 + 5], 0);  /* square (1,1) */
+	mvod_board_image_free(&img);
+}
+
+/* A ChArUco pattern: black squares where the chessboard has them, markers inside the others. */
+static void charuco_drawing(void **state)
+{
+	(void)state;
+	struct mvod_board b;
+	char err[256];
+	assert_int_equal(mvod_board_parse("charuco:5x7:0.04:0.02:DICT_6X6_250", &b, err, sizeof(err)), 0);
+	struct mvod_image img;
+	assert_int_equal(mvod_board_draw(&b, 40, 0, &img), 0);
+	assert_int_equal(img.w, 200);
+	assert_int_equal(img.h, 280);
+	assert_int_equal(img.data[20 * img.stride + 20], 0);  /* square (0,0): black */
+	assert_int_equal(img.data[2 * img.stride + 42], 255); /* white border of square (1,0)'s marker */
+	int black = 0; /* the marker in square (1,0) has black cells */
+	for (int y = 50; y < 70; y++)
+		for (int x = 50; x < 70; x++)
+			black += img.data[(y - 40) * img.stride + x] == 0;
+	assert_true(black > 0);
+	mvod_board_image_free(&img);
+	assert_int_equal(mvod_board_draw(&b, 2, 0, &img), -EINVAL);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(charuco_spec_round_trips),
+		cmocka_unit_test(chessboard_geometry),
+		cmocka_unit_test(malformed_specs_say_what_is_wrong),
+		cmocka_unit_test(chessboard_drawing),
+		cmocka_unit_test(charuco_drawing),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
