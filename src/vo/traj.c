@@ -48,18 +48,25 @@ int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mv
 	return 0;
 }
 
+/* -0 + 0 is +0: an identity pose prints as "0", not "-0", which reads like a sign bug. */
+static double z(double v)
+{
+	return v + 0.0;
+}
+
 static int format_line(enum mvod_traj_format fmt, double t, const struct mvod_pose *p, char *buf,
 		       size_t len)
 {
+	const double *R = p->R, *T = p->t;
 	if (fmt == MVOD_TRAJ_TUM) {
 		double q[4];
-		mvod_rot_to_quat(p->R, q);
-		return snprintf(buf, len, "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", t, p->t[0],
-				p->t[1], p->t[2], q[1], q[2], q[3], q[0]);
+		mvod_rot_to_quat(R, q);
+		return snprintf(buf, len, "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", t, z(T[0]),
+				z(T[1]), z(T[2]), z(q[1]), z(q[2]), z(q[3]), z(q[0]));
 	}
-	const double *R = p->R;
 	return snprintf(buf, len, "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e\n",
-			R[0], R[1], R[2], p->t[0], R[3], R[4], R[5], p->t[1], R[6], R[7], R[8], p->t[2]);
+			z(R[0]), z(R[1]), z(R[2]), z(T[0]), z(R[3]), z(R[4]), z(R[5]), z(T[1]),
+			z(R[6]), z(R[7]), z(R[8]), z(T[2]));
 }
 
 int mvod_traj_writer_add(struct mvod_traj_writer *w, double t, const struct mvod_pose *pose)

@@ -95,6 +95,29 @@ static void test_load_errors(void **state)
 	assert_int_equal(mvod_traj_load("/nonexistent/x", &tr, err, sizeof(err)), -ENOENT);
 }
 
+/* A pose with negative zeros (a rotation about -x by 0, a translation of -0) prints no "-0". */
+static void test_no_negative_zero(void **state)
+{
+	(void)state;
+	for (int f = 0; f < 2; f++) {
+		char path[128];
+		snprintf(path, sizeof(path), "%s/zero.%d", dir, f);
+		struct mvod_traj_writer *w;
+		assert_int_equal(mvod_traj_writer_open(path, (enum mvod_traj_format)f, &w), 0);
+		struct mvod_pose p = {.R = {1, -0.0, -0.0, -0.0, 1, -0.0, -0.0, -0.0, 1},
+				      .t = {-0.0, -0.0, -0.0}};
+		assert_int_equal(mvod_traj_writer_add(w, 0, &p), 0);
+		assert_int_equal(mvod_traj_writer_close(w), 0);
+		char line[512] = "";
+		FILE *in = fopen(path, "r");
+		assert_non_null(in);
+		assert_non_null(fgets(line, sizeof(line), in));
+		fclose(in);
+		if (strstr(line, "-0"))
+			fail_msg("format %d wrote a negative zero: %s", f, line);
+	}
+}
+
 static void test_writer_reports_full_disk(void **state)
 {
 	(void)state;
@@ -133,6 +156,7 @@ int main(void)
 		cmocka_unit_test(test_tum_round_trip),
 		cmocka_unit_test(test_kitti_round_trip),
 		cmocka_unit_test(test_load_errors),
+		cmocka_unit_test(test_no_negative_zero),
 		cmocka_unit_test(test_writer_reports_full_disk),
 		cmocka_unit_test(test_path_decimates_in_fixed_memory),
 	};
