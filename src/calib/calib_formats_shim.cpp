@@ -91,8 +91,8 @@ int read_camera(const cv::FileStorage &fs, mvod_camera &c, char *err, size_t err
 		return ret;
 	if (fs["camera_matrix"].isNone() && !stereo)
 		return mvod_errf(err, errlen, -EINVAL,
-				 "no \"camera_matrix\" key: not an OpenCV or ROS calibration (mvod also reads "
-				 "mvod JSON, [K, dist] JSON and KITTI calib.txt)");
+				 "unknown calibration format: no \"camera_matrix\" key, so not OpenCV or ROS "
+				 "YAML (mvod also reads mvod JSON, [K, dist] JSON and KITTI calib.txt)");
 	if ((ret = read_matrix(fs[kkey], kkey, rows, cols, v, err, errlen)))
 		return ret;
 	if (rows != 3 || cols != 3 || mvod_calib_set_K(v.data(), &c) != 0)
@@ -129,8 +129,8 @@ extern "C" int mvod_calib_parse_filestorage(const char *text, struct mvod_camera
 		}
 		if (!fs.isOpened())
 			return mvod_errf(err, errlen, -EINVAL,
-					 "not mvod JSON, a [K, dist] JSON pair, KITTI calib.txt, OpenCV YAML/XML or "
-					 "ROS camera_info YAML (unreadable as YAML)");
+					 "unknown calibration format: not mvod JSON, a [K, dist] JSON pair, KITTI "
+					 "calib.txt, OpenCV YAML/XML or ROS camera_info YAML");
 		mvod_camera c{};
 		c.model = MVOD_CAM_PINHOLE_RADTAN;
 		int r = read_camera(fs, c, err, errlen);
