@@ -11,6 +11,7 @@ struct command {
 
 static const struct command commands[] = {
 	{"run", mvod_cmd_run},
+	{"calib-convert", mvod_cmd_convert},
 };
 
 int main(int argc, char **argv)

@@ -40,8 +40,9 @@ int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out);
 bool mvod_camera_has_distortion(const struct mvod_camera *cam);
 
 /*
- * Loads a calibration file, choosing the reader by content: mvod JSON (mvod-calibration/1) or
- * KITTI calib.txt (P0). On failure returns -errno and writes a one-line reason to err.
+ * Loads a calibration file, choosing the reader by content: mvod JSON (mvod-calibration/1),
+ * a JSON [K, dist] pair, KITTI calib.txt (P0), OpenCV FileStorage YAML/XML or ROS camera_info
+ * YAML (see below). On failure returns -errno and writes a one-line reason naming the file to err.
  */
 int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen);
 /* KITTI odometry calib.txt: intrinsics from P0, no distortion, image size unknown (0). */
@@ -54,6 +55,53 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
  * existing file is replaced whole or not at all. meta may be NULL.
  */
 int mvod_calib_save(const char *path, const struct mvod_camera *cam, const struct mvod_calib_meta *meta);
+
+/* The calibration file formats mvod reads (all) and writes (all but the [K, dist] pair). */
+enum mvod_calib_format {
+	MVOD_CALIB_FMT_MVOD = 0,   /* mvod JSON, mvod-calibration/1 */
+	MVOD_CALIB_FMT_OPENCV = 1, /* OpenCV FileStorage YAML or XML */
+	MVOD_CALIB_FMT_ROS = 2,    /* ROS camera_info YAML */
+	MVOD_CALIB_FMT_KITTI = 3,  /* KITTI odometry calib.txt */
+	MVOD_CALIB_FMT_PAIR = 4,   /* JSON [K, dist] or {"K": K, "dist": dist} (read only) */
+};
+
+/* "mvod", "opencv", "ros", "kitti", "pair" and back; a longer description for messages. */
+const char *mvod_calib_format_name(enum mvod_calib_format fmt);
+const char *mvod_calib_format_title(enum mvod_calib_format fmt);
+int mvod_calib_format_parse(const char *name, enum mvod_calib_format *out);
+
+/* mvod_calib_load, also saying which format the file was in (fmt may be NULL). */
+int mvod_calib_load_format(const char *path, struct mvod_camera *cam, enum mvod_calib_format *fmt,
+			   char *err, size_t errlen);
+
+/*
+ * A JSON [K, dist] pair (as numpy's tolist() or many scripts dump it): K as 3 rows or 9
+ * numbers, dist as a list (or a 1xN nested list) of 0, 4, 5, 8, 12 or 14 coefficients; or the
+ * object {"K": K, "dist": dist} with an optional "model" ("fisheye-kb4"). No image size: 0.
+ */
+int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *err, size_t errlen);
+
+/*
+ * OpenCV FileStorage YAML/XML or ROS camera_info YAML (read through cv::FileStorage, which
+ * needs OpenCV's "%YAML:1.0" header, so one is added when the text lacks it): K from
+ * camera_matrix (or M1, the first camera of OpenCV's stereo_calib sample), coefficients from
+ * distortion_coefficients (or D1). The model is pinhole-radtan unless distortion_model says
+ * equidistant, fisheye or fisheye-kb4; OpenCV's own files cannot say, so 4 coefficients are
+ * k1 k2 p1 p2 there. image_width and image_height are optional (0 when absent). fmt (may be
+ * NULL) says whether the text was OpenCV's (with its header, or XML) or ROS's.
+ */
+int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam,
+				 enum mvod_calib_format *fmt, char *err, size_t errlen);
+
+/*
+ * Writers, each through a temporary file and rename(). OpenCV: YAML, or XML when path ends in
+ * ".xml"; a fisheye camera gets "distortion_model: fisheye" so that mvod reads it back as one.
+ * ROS: camera_info YAML (plumb_bob, rational_polynomial or equidistant; needs the image size).
+ * KITTI: P0..P3 all [K | 0]; refuses a camera with distortion, since calib.txt cannot carry it.
+ */
+int mvod_calib_save_opencv(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
+int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
+int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

@@ -9,6 +9,7 @@
 
 #include <cjson/cJSON.h>
 
+#include "calib/calib_internal.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
 
@@ -41,8 +42,7 @@ bool mvod_camera_has_distortion(const struct mvod_camera *cam)
 	return false;
 }
 
-/* Reads a whole small file into a NUL-terminated heap buffer. */
-static int read_text(const char *path, char **out, char *err, size_t errlen)
+int mvod_calib_read_text(const char *path, char **out, char *err, size_t errlen)
 {
 	FILE *f = fopen(path, "rb");
 	if (!f)
@@ -107,20 +107,33 @@ static int json_K(const cJSON *K, struct mvod_camera *cam)
 			if (json_number_array(cJSON_GetArrayItem(K, r), k + 3 * r, 3, 3, NULL) != 0)
 				return -EINVAL;
 	}
-	if (k[6] != 0 || k[7] != 0 || k[8] != 1 || k[3] != 0)
-		return -EINVAL;
-	cam->fx = k[0];
-	cam->fy = k[4];
-	cam->cx = k[2];
-	cam->cy = k[5];
-	return k[1] == 0 ? 0 : -EINVAL; /* skew is not modelled */
+	return mvod_calib_set_K(k, cam);
 }
 
-static int valid_dist_count(enum mvod_cam_model model, int n)
+int mvod_calib_set_K(const double k[9], struct mvod_camera *cam)
+{
+	struct mvod_camera c = *cam;
+	c.fx = k[0];
+	c.fy = k[4];
+	c.cx = k[2];
+	c.cy = k[5];
+	/* Skew (k[1]) is not modelled. */
+	if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1 || !valid_intrinsics(&c))
+		return -EINVAL;
+	*cam = c;
+	return 0;
+}
+
+bool mvod_calib_dist_count_ok(enum mvod_cam_model model, int n)
 {
 	if (model == MVOD_CAM_FISHEYE_KB4)
 		return n == 4;
 	return n == 0 || n == 4 || n == 5 || n == 8 || n == 12 || n == 14;
+}
+
+const char *mvod_calib_dist_counts(enum mvod_cam_model model)
+{
+	return model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14";
 }
 
 int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
@@ -159,15 +172,66 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
 	}
 	const cJSON *dist = cJSON_GetObjectItemCaseSensitive(root, "distortion");
 	if (json_number_array(dist, c.dist, 0, MVOD_MAX_DIST, &c.n_dist) != 0 ||
-	    !valid_dist_count(c.model, c.n_dist)) {
+	    !mvod_calib_dist_count_ok(c.model, c.n_dist)) {
 		ret = mvod_errf(err, errlen, -EINVAL,
 			   "\"distortion\" must hold %s numbers for model %s",
-			   c.model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14",
-			   mvod_cam_model_name(c.model));
+			   mvod_calib_dist_counts(c.model), mvod_cam_model_name(c.model));
 		goto out;
 	}
 	*cam = c;
 out:
+	cJSON_Delete(root);
+	return ret;
+}
+
+/* Coefficients as [k1, ...] or as numpy's 1xN [[k1, ...]]. */
+static int json_dist(const cJSON *d, struct mvod_camera *c)
+{
+	if (cJSON_GetArraySize(d) == 1 && cJSON_IsArray(cJSON_GetArrayItem(d, 0)))
+		d = cJSON_GetArrayItem(d, 0);
+	if (json_number_array(d, c->dist, 0, MVOD_MAX_DIST, &c->n_dist) != 0 ||
+	    !mvod_calib_dist_count_ok(c->model, c->n_dist))
+		return -EINVAL;
+	return 0;
+}
+
+/* The object form may name the model; the array form cannot. */
+static int json_pair_model(const cJSON *root, struct mvod_camera *c)
+{
+	const cJSON *model = cJSON_GetObjectItemCaseSensitive(root, "model");
+	if (!model)
+		return 0;
+	return cJSON_IsString(model) ? mvod_cam_model_parse(model->valuestring, &c->model) : -EINVAL;
+}
+
+int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	struct mvod_camera c = {.model = MVOD_CAM_PINHOLE_RADTAN};
+	cJSON *root = cJSON_Parse(text);
+	if (!root)
+		return mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
+			    cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "?");
+	int ret = 0;
+	bool array = cJSON_IsArray(root);
+	const char *kname = array ? "element 0 (K)" : "\"K\"";
+	const char *dname = array ? "element 1 (distortion)" : "\"dist\"";
+	if (!(array ? cJSON_GetArraySize(root) == 2 : cJSON_IsObject(root))) {
+		ret = mvod_errf(err, errlen, -EINVAL,
+			   "expected [K, dist] or {\"K\": K, \"dist\": dist} (or mvod JSON with \"format\")");
+	} else if (!array && json_pair_model(root, &c) != 0) {
+		ret = mvod_errf(err, errlen, -EINVAL,
+			   "\"model\" must be \"pinhole-radtan\" or \"fisheye-kb4\"");
+	} else if (json_K(array ? cJSON_GetArrayItem(root, 0) : cJSON_GetObjectItemCaseSensitive(root, "K"),
+			  &c) != 0) {
+		ret = mvod_errf(err, errlen, -EINVAL,
+			   "%s must be [[fx,0,cx],[0,fy,cy],[0,0,1]] with fx, fy > 0", kname);
+	} else if (json_dist(array ? cJSON_GetArrayItem(root, 1)
+				   : cJSON_GetObjectItemCaseSensitive(root, "dist"), &c) != 0) {
+		ret = mvod_errf(err, errlen, -EINVAL, "%s must hold %s numbers for model %s", dname,
+			   mvod_calib_dist_counts(c.model), mvod_cam_model_name(c.model));
+	} else {
+		*cam = c;
+	}
 	cJSON_Delete(root);
 	return ret;
 }
@@ -201,7 +265,7 @@ static int parse_kitti(const char *text, struct mvod_camera *cam)
 int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = read_text(path, &text, err, errlen);
+	int ret = mvod_calib_read_text(path, &text, err, errlen);
 	if (ret)
 		return ret;
 	ret = parse_kitti(text, cam);
@@ -213,29 +277,59 @@ int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, 
 	return ret ? -EINVAL : 0;
 }
 
-int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+/* mvod JSON carries "format"; any other JSON is read as a [K, dist] pair. */
+static bool json_is_mvod(const char *text)
+{
+	cJSON *root = cJSON_Parse(text);
+	bool mvod = cJSON_IsObject(root) && cJSON_GetObjectItemCaseSensitive(root, "format");
+	cJSON_Delete(root);
+	return mvod;
+}
+
+/* OpenCV and ROS YAML look alike; mvod_calib_parse_filestorage tells them apart. */
+static enum mvod_calib_format sniff_format(const char *text)
+{
+	const char *p = text + strspn(text, " \t\r\n");
+	if (*p == '{' || *p == '[')
+		return json_is_mvod(p) ? MVOD_CALIB_FMT_MVOD : MVOD_CALIB_FMT_PAIR;
+	if (strstr(text, "P0:"))
+		return MVOD_CALIB_FMT_KITTI;
+	return MVOD_CALIB_FMT_OPENCV;
+}
+
+int mvod_calib_load_format(const char *path, struct mvod_camera *cam, enum mvod_calib_format *fmt,
+			   char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = read_text(path, &text, err, errlen);
+	int ret = mvod_calib_read_text(path, &text, err, errlen);
 	if (ret)
 		return ret;
-	const char *p = text;
-	while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')
-		p++;
-	char why[200] = "";
-	if (*p == '{') {
+	enum mvod_calib_format f = sniff_format(text);
+	char why[256] = "";
+	switch (f) {
+	case MVOD_CALIB_FMT_MVOD:
 		ret = mvod_calib_parse_json(text, cam, why, sizeof(why));
-		if (ret)
-			mvod_errf(err, errlen, ret, "%s: %s", path, why);
-	} else if (strstr(text, "P0:")) {
-		ret = mvod_calib_load_kitti(path, cam, err, errlen);
-	} else {
-		ret = mvod_errf(err, errlen, -EINVAL,
-			   "%s: unknown calibration format (expected mvod JSON or KITTI calib.txt)",
-			   path);
+		break;
+	case MVOD_CALIB_FMT_PAIR:
+		ret = mvod_calib_parse_json_pair(text, cam, why, sizeof(why));
+		break;
+	case MVOD_CALIB_FMT_KITTI:
+		ret = mvod_calib_load_kitti(path, cam, err, errlen); /* names the file itself */
+		break;
+	default:
+		ret = mvod_calib_parse_filestorage(text, cam, &f, why, sizeof(why));
 	}
+	if (ret && f != MVOD_CALIB_FMT_KITTI)
+		mvod_errf(err, errlen, ret, "%s: %s", path, why);
+	if (!ret && fmt)
+		*fmt = f;
 	free(text);
 	return ret;
+}
+
+int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	return mvod_calib_load_format(path, cam, NULL, err, errlen);
 }
 
 static cJSON *number_row(const double *v, int n)

@@ -104,8 +104,9 @@ void cli_usage_input(FILE *out)
 		fprintf(out, "                          %-8s %s\n", mvod_source_backends[i]->scheme,
 			mvod_source_backends[i]->summary);
 	fprintf(out,
-"  --calib FILE          camera calibration: mvod JSON (mvod-calibration/1) or KITTI\n"
-"                        calib.txt; not needed for kitti: sources (they carry P0)\n"
+"  --calib FILE          camera calibration: mvod JSON (mvod-calibration/1), OpenCV\n"
+"                        YAML/XML, ROS camera_info, JSON [K, dist] or KITTI calib.txt\n"
+"                        (see mvod calib-convert --help); not needed for kitti: sources\n"
 "  --gt FILE             ground-truth trajectory, TUM or KITTI (matched by timestamp or\n"
 "                        by index); enables the accuracy summary and the GT path in --plot\n"
 "  --max-frames N        stop after N frames (default: the whole source)\n"

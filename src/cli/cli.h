@@ -61,5 +61,6 @@ int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn
 
 /* Subcommands: argv[0] is the subcommand's name. Return the process exit status. */
 int mvod_cmd_run(int argc, char **argv);
+int mvod_cmd_convert(int argc, char **argv);
 
 #endif

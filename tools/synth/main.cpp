@@ -1,14 +1,17 @@
 // mvod-synth: renders a textured 3-D street seen by a moving camera, with exact ground truth,
 // so that mvod's visual odometry and calibration can be tested against known answers.
 
+#include "board.hpp"
 #include "failure.hpp"
 #include "paths.hpp"
 #include "render.hpp"
 #include "world.hpp"
 
 extern "C" {
+#include "mvod/board.h"
 #include "mvod/calib.h"
 #include "mvod/traj.h"
+#include "util/atomic_file.h"
 }
 
 #include <opencv2/imgcodecs.hpp>
@@ -34,6 +37,7 @@ using namespace synth;
 namespace {
 
 const char kUsage[] = R"(Usage: mvod-synth --out DIR [options]
+       mvod-synth --out DIR --board SPEC [--views N] [camera and image options]
 
 Renders a textured 3-D street (ground, facades, boxes, poles, sky) seen by a moving camera,
 with the exact camera poses and intrinsics, for testing visual odometry and calibration.
@@ -46,6 +50,17 @@ Writes into DIR (created if missing; earlier outputs there are replaced):
   gt.tum, gt.kitti         camera-to-world pose of every frame (OpenCV axes: x right, y down,
                            z forward; metres; for built-in paths the first camera is the world)
   calib.json               intrinsics and distortion (mvod-calibration/1)
+
+With --board SPEC, views of a calibration target instead of a street (see below), and also:
+  board_poses.txt          "VIEW RX RY RZ TX TY TZ" per view: board-to-camera rotation vector
+                           and translation (metres), X_cam = R(r) X_board + t, as OpenCV's
+                           calibrateCamera reports them; board frame of include/mvod/board.h
+                           (origin at the pattern's top-left outer corner, x right, y down)
+  corners.txt              "VIEW ID U V" per interior corner: the exact pixel position (OpenCV
+                           convention: pixel centres at integers) of corner ID (row-major, as
+                           OpenCV's chessboard and ChArUco detectors number them), projected
+                           through the exact lens; every corner of every view is in the image
+  gt.tum, gt.kitti         the camera-to-board poses, one per view
 
 Options:
   --out DIR              output directory (required)
@@ -78,6 +93,21 @@ Options:
                          (default 0)
   --seed N               seed for the world, its textures and the noise (default 1)
   --format mkv|png       output format (default mkv)
+
+Calibration target (--board):
+  --board SPEC           charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT (COLSxROWS squares) or
+                         chessboard:COLSxROWS:SQUARE_M (inner corners), e.g.
+                         charuco:5x7:0.04:0.02:DICT_6X6_250 or chessboard:9x6:0.025. The
+                         pattern (up to 128 texels per square, a one-square white quiet zone,
+                         printed black 20 and white 224) is a plane in front of a dim textured
+                         wall, ray-cast through the exact lens like the street
+  --views N              views to render (default 60): board centres over a 3x3 grid of image
+                         positions in turn, the pattern 30-60% of the image wide, tilted up to
+                         50 deg about both board axes and rotated in its plane up to 45 deg;
+                         always the whole pattern in view, at least 8 px from the border
+  --inverted             invert the printed board (white markers and squares on black)
+  Example: mvod-synth --out views/ --board chessboard:9x6:0.025 --views 40 --format png \
+             --distortion -0.3,0.1,0,0,0 --noise 2
   -h, --help             show this help
 
 Exit status: 0 on success, 1 on a run-time failure (unreadable pose file, unwritable output),
@@ -97,6 +127,10 @@ struct Options {
 	uint64_t seed = 1;
 	bool png = false;
 	double speed = 1.0;
+	std::string board; // empty: the street
+	int views = 60;
+	bool inverted = false;
+	bool street_options = false; // --path, --frames or --speed given
 };
 
 [[noreturn]] void usage_error(const std::string &message)
@@ -185,7 +219,8 @@ void parse_size(const char *text, Options &o)
 
 Options parse_options(int argc, char **argv)
 {
-	enum { OUT = 256, PATH, FRAMES, FPS, SIZE, FX, FY, CX, CY, DISTORTION, FISHEYE, NOISE, BLUR, SEED, FORMAT, SPEED };
+	enum { OUT = 256, PATH, FRAMES, FPS, SIZE, FX, FY, CX, CY, DISTORTION, FISHEYE, NOISE, BLUR, SEED, FORMAT, SPEED,
+	       BOARD, VIEWS, INVERTED };
 	static const option longopts[] = {
 		{"out", required_argument, nullptr, OUT},
 		{"path", required_argument, nullptr, PATH},
@@ -203,6 +238,9 @@ Options parse_options(int argc, char **argv)
 		{"seed", required_argument, nullptr, SEED},
 		{"format", required_argument, nullptr, FORMAT},
 		{"speed", required_argument, nullptr, SPEED},
+		{"board", required_argument, nullptr, BOARD},
+		{"views", required_argument, nullptr, VIEWS},
+		{"inverted", no_argument, nullptr, INVERTED},
 		{"help", no_argument, nullptr, 'h'},
 		{nullptr, 0, nullptr, 0},
 	};
@@ -214,8 +252,14 @@ Options parse_options(int argc, char **argv)
 		const char *name = c >= OUT ? longopts[c - OUT].name : "";
 		switch (c) {
 		case OUT: o.out = optarg; break;
-		case PATH: o.path = optarg; break;
-		case FRAMES: o.frames = parse_count(name, optarg); break;
+		case PATH:
+			o.path = optarg;
+			o.street_options = true;
+			break;
+		case FRAMES:
+			o.frames = parse_count(name, optarg);
+			o.street_options = true;
+			break;
 		case FPS: o.fps = parse_positive(name, optarg); break;
 		case SIZE: parse_size(optarg, o); break;
 		case FX: o.fx = parse_positive(name, optarg); break;
@@ -238,7 +282,13 @@ Options parse_options(int argc, char **argv)
 				usage_error(std::string("--format: '") + optarg + "' is neither mkv nor png");
 			o.png = std::strcmp(optarg, "png") == 0;
 			break;
-		case SPEED: o.speed = parse_positive(name, optarg); break;
+		case SPEED:
+			o.speed = parse_positive(name, optarg);
+			o.street_options = true;
+			break;
+		case BOARD: o.board = optarg; break;
+		case VIEWS: o.views = parse_count(name, optarg); break;
+		case INVERTED: o.inverted = true; break;
 		case 'h':
 			std::fputs(kUsage, stdout);
 			std::exit(0);
@@ -252,6 +302,8 @@ Options parse_options(int argc, char **argv)
 		usage_error("--out DIR is required");
 	if (radtan && o.fisheye)
 		usage_error("--distortion and --fisheye are two lens models: give one");
+	if (!o.board.empty() && o.street_options)
+		usage_error("--path, --frames and --speed describe the street; --board renders --views N views of a board");
 	return o;
 }
 
@@ -283,7 +335,8 @@ std::string errno_text(int negative_errno)
 // writers that leave only whole lines behind, so an interrupted run still has a valid prefix.
 class Output {
 public:
-	Output(const Options &o, const Camera &cam, const std::string &command_line) : dir_(o.out), png_(o.png)
+	Output(const Options &o, const Camera &cam, const std::string &command_line)
+		: dir_(o.out), png_(o.png), board_(o.board)
 	{
 		std::error_code ec;
 		fs::create_directories(png_ ? dir_ / "images" : dir_, ec);
@@ -349,6 +402,15 @@ public:
 		close_trajectory("gt.kitti", &kitti_);
 	}
 
+	// A whole file at once, through a temporary and rename().
+	void write_file(const char *name, const std::string &text) const
+	{
+		const fs::path file = dir_ / name;
+		const int rc = mvod_write_replace(file.c_str(), text.data(), text.size());
+		if (rc < 0)
+			throw Failure(kExitFailure, "cannot write " + file.string() + ": " + errno_text(rc));
+	}
+
 private:
 	// Frames of an earlier, longer run would otherwise be read as part of this one.
 	void remove_old_frames()
@@ -384,6 +446,7 @@ private:
 		mvod_calib_meta meta{};
 		meta.rms_px = -1;
 		std::snprintf(meta.source, sizeof meta.source, "%s", command_line.c_str());
+		std::snprintf(meta.board, sizeof meta.board, "%s", board_.c_str());
 		if (command_line.size() >= sizeof meta.source) // cut, and say so
 			std::memcpy(meta.source + sizeof meta.source - 4, "...", 4);
 
@@ -432,6 +495,7 @@ private:
 
 	fs::path dir_;
 	bool png_;
+	std::string board_;
 	cv::VideoWriter video_;
 	std::ofstream times_, image_times_;
 	mvod_traj_writer *tum_ = nullptr, *kitti_ = nullptr;
@@ -470,8 +534,96 @@ double path_length(const Trajectory &tr)
 	return length;
 }
 
+void check_lens(const Renderer &renderer, const Options &o)
+{
+	if (renderer.worst_ray_error() > 0.01) {
+		char message[160];
+		std::snprintf(message, sizeof message,
+			      "--%s: these coefficients fold the image over (some pixels have no ray; worst miss %.3g px)",
+			      o.fisheye ? "fisheye" : "distortion", renderer.worst_ray_error());
+		usage_error(message);
+	}
+}
+
+// The printed pattern: as many texels per square as fit a 4096-texel texture, up to 128 (at
+// least 2 texels per image pixel for any board that fills less than the whole image), with a
+// one-square quiet zone.
+cv::Mat board_face(const mvod_board &board, const Options &o, int &px_per_square)
+{
+	int across, down;
+	mvod_board_squares(&board, &across, &down);
+	px_per_square = 128;
+	while (px_per_square > 16 && (std::max(across, down) + 2) * px_per_square > 4096)
+		px_per_square /= 2;
+	mvod_image face{};
+	const int rc = mvod_board_draw(&board, px_per_square, px_per_square, &face);
+	if (rc < 0)
+		throw Failure(kExitFailure, "cannot draw the board: " + errno_text(rc));
+	cv::Mat image = cv::Mat(face.h, face.w, CV_8UC1, face.data, size_t(face.stride)).clone();
+	mvod_board_image_free(&face);
+	if (o.inverted)
+		image = 255 - image;
+	return image;
+}
+
+std::string format_pose(int view, const BoardPose &p)
+{
+	char line[256];
+	std::snprintf(line, sizeof line, "%d %.17g %.17g %.17g %.17g %.17g %.17g\n", view, p.rvec[0], p.rvec[1], p.rvec[2],
+		      p.t[0], p.t[1], p.t[2]);
+	return line;
+}
+
+std::string format_corners(int view, const std::vector<cv::Point2d> &corners)
+{
+	std::string text;
+	for (size_t id = 0; id < corners.size(); id++) {
+		char line[96];
+		std::snprintf(line, sizeof line, "%d %zu %.9f %.9f\n", view, id, corners[id].x, corners[id].y);
+		text += line;
+	}
+	return text;
+}
+
+void run_board(const Options &o, const std::string &command_line)
+{
+	mvod_board board;
+	char err[256];
+	if (mvod_board_parse(o.board.c_str(), &board, err, sizeof err) < 0)
+		usage_error(std::string("--board: ") + err);
+	const Camera cam = camera_from(o);
+	int pps;
+	const cv::Mat face = board_face(board, o, pps);
+	const double texel = board.square_m / pps;
+	const World world = build_board_scene(face, pps * texel, texel, o.seed);
+	Renderer renderer(world, cam);
+	check_lens(renderer, o);
+	const std::vector<BoardPose> poses = board_poses(board, cam, o.views, o.seed);
+
+	Output out(o, cam, command_line);
+	cv::RNG noise_rng(stream_seed(o.seed, 7));
+	cv::Mat image, grey;
+	std::string pose_text = "# view rx ry rz tx ty tz: board-to-camera, X_cam = R(r) X_board + t, metres\n";
+	std::string corner_text = "# view corner u v: exact pixel position (pixel centres at integers)\n";
+	for (size_t i = 0; i < poses.size(); i++) {
+		const Pose camera = poses[i].camera_to_board();
+		renderer.render(camera, image);
+		develop(image, o, noise_rng, grey);
+		out.add(double(i) / o.fps, camera, grey);
+		pose_text += format_pose(int(i), poses[i]);
+		corner_text += format_corners(int(i), project_corners(board, cam, poses[i]));
+	}
+	out.write_file("board_poses.txt", pose_text);
+	out.write_file("corners.txt", corner_text);
+	out.close();
+	std::printf("mvod-synth: %zu views of %s, %dx%d, %d texels per square, written to %s\n", poses.size(),
+		    o.board.c_str(), cam.width, cam.height, pps, o.out.c_str());
+}
+
 void run(const Options &o, const std::string &command_line)
 {
+	if (!o.board.empty())
+		return run_board(o, command_line);
 	const Trajectory path = make_trajectory(o);
 	const Camera cam = camera_from(o);
 
@@ -484,13 +636,7 @@ void run(const Options &o, const std::string &command_line)
 	const World world = build_street(skeleton, cameras, o.seed);
 
 	Renderer renderer(world, cam);
-	if (renderer.worst_ray_error() > 0.01) {
-		char message[160];
-		std::snprintf(message, sizeof message,
-			      "--%s: these coefficients fold the image over (some pixels have no ray; worst miss %.3g px)",
-			      o.fisheye ? "fisheye" : "distortion", renderer.worst_ray_error());
-		usage_error(message);
-	}
+	check_lens(renderer, o);
 
 	Output out(o, cam, command_line);
 	cv::RNG noise_rng(stream_seed(o.seed, 7));

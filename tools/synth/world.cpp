@@ -311,6 +311,42 @@ cv::Vec3d Skeleton::left(double s) const
 	return {-d[2], 0, d[0]};
 }
 
+World build_board_scene(const cv::Mat &face, double margin_m, double texel_m, uint64_t seed)
+{
+	// Textures are square powers of two that wrap: pad the face with its own quiet zone, so
+	// filtering across the board's edge sees quiet zone rather than the far side of the pattern.
+	int side = 1;
+	while (side < std::max(face.cols, face.rows))
+		side *= 2;
+	cv::Mat square(side, side, CV_8UC1, cv::Scalar(face.at<uint8_t>(0, 0)));
+	face.copyTo(square(cv::Rect(0, 0, face.cols, face.rows)));
+
+	World world;
+	world.textures.emplace_back(square);
+	world.textures.emplace_back(generate_texture(kPoolSize, stream_seed(seed, 1)));
+
+	const double w = face.cols * texel_m, h = face.rows * texel_m;
+	const cv::Vec3d x(1, 0, 0), y(0, 1, 0), towards(0, 0, -1);
+	Plane board = rectangle(cv::Vec3d(-margin_m, -margin_m, 0), x, w, y, h, towards, true);
+	board.texture = 0;
+	board.u = {board.a.g / texel_m, board.a.h / texel_m};
+	board.v = {board.b.g / texel_m, board.b.h / texel_m};
+	board.gain = 204.0f / 255.0f;
+	board.bias = 20;
+	world.planes.push_back(board);
+
+	// A wall one board-width behind, wide enough to fill every view of the board.
+	const double reach = 20 * std::max(w, h), wall_texel = std::max(w, h) / 256;
+	Plane wall = rectangle(cv::Vec3d(-reach, -reach, std::max(w, h)), x, 2 * reach, y, 2 * reach, towards, true);
+	wall.texture = 1;
+	wall.u = {wall.a.g / wall_texel, wall.a.h / wall_texel};
+	wall.v = {wall.b.g / wall_texel, wall.b.h / wall_texel};
+	wall.gain = 0.3f;
+	wall.bias = 70;
+	world.planes.push_back(wall);
+	return world;
+}
+
 World build_street(const Skeleton &skeleton, const std::vector<cv::Vec3d> &cameras, uint64_t seed)
 {
 	World world;

@@ -78,6 +78,14 @@ private:
 // it, not beyond, except where later parts of the path come near it.
 World build_street(const Skeleton &skeleton, const std::vector<cv::Vec3d> &cameras, uint64_t seed);
 
+// A calibration target for mvod-synth --board: `face` (8-bit grey, the pattern with its quiet
+// zone, as mvod_board_draw makes it) on the plane z = 0 of the board frame (x right, y down, z
+// into the board; include/mvod/board.h), its top-left texel corner at (-margin_m, -margin_m),
+// texel_m metres per texel, in front of a dim, low-contrast textured wall. Printed blacks and
+// whites are 20 and 224 rather than 0 and 255, so that noise is not clipped. Deterministic in
+// (face, seed).
+World build_board_scene(const cv::Mat &face, double margin_m, double texel_m, uint64_t seed);
+
 // Height of the camera above the ground it moves over, in metres (the ground is +y of it).
 constexpr double kCameraHeight = 1.6;
 

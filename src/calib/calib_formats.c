@@ -1,0 +1,151 @@
+/* Calibration formats by name, and the plain-text writers: ROS camera_info YAML, KITTI calib.txt. */
+#include "mvod/calib.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "calib/calib_internal.h"
+#include "util/atomic_file.h"
+#include "util/errbuf.h"
+
+static const struct {
+	const char *name, *title;
+} formats[] = {
+	[MVOD_CALIB_FMT_MVOD] = {"mvod", "mvod JSON"},
+	[MVOD_CALIB_FMT_OPENCV] = {"opencv", "OpenCV FileStorage"},
+	[MVOD_CALIB_FMT_ROS] = {"ros", "ROS camera_info YAML"},
+	[MVOD_CALIB_FMT_KITTI] = {"kitti", "KITTI calib.txt"},
+	[MVOD_CALIB_FMT_PAIR] = {"pair", "JSON [K, dist] pair"},
+};
+#define N_FORMATS ((int)(sizeof(formats) / sizeof(formats[0])))
+
+const char *mvod_calib_format_name(enum mvod_calib_format fmt)
+{
+	return (unsigned)fmt < N_FORMATS ? formats[fmt].name : "unknown";
+}
+
+const char *mvod_calib_format_title(enum mvod_calib_format fmt)
+{
+	return (unsigned)fmt < N_FORMATS ? formats[fmt].title : "unknown format";
+}
+
+int mvod_calib_format_parse(const char *name, enum mvod_calib_format *out)
+{
+	for (int i = 0; i < N_FORMATS; i++) {
+		if (strcmp(name, formats[i].name) == 0) {
+			*out = (enum mvod_calib_format)i;
+			return 0;
+		}
+	}
+	return -EINVAL;
+}
+
+/* The shortest decimal that reads back as the same double (17 digits always would). */
+static void put_number(FILE *f, double v)
+{
+	char buf[32];
+	for (int digits = 15; digits <= 17; digits++) {
+		snprintf(buf, sizeof(buf), "%.*g", digits, v);
+		if (strtod(buf, NULL) == v)
+			break;
+	}
+	fputs(buf, f);
+}
+
+static void put_numbers(FILE *f, const double *v, int n, const char *sep)
+{
+	for (int i = 0; i < n; i++) {
+		fputs(i ? sep : "", f);
+		put_number(f, v[i]);
+	}
+}
+
+static void put_ros_matrix(FILE *f, const char *key, int rows, int cols, const double *v)
+{
+	fprintf(f, "%s:\n  rows: %d\n  cols: %d\n  data: [", key, rows, cols);
+	put_numbers(f, v, rows * cols, ", ");
+	fputs("]\n", f);
+}
+
+/* Text built in a memory stream (buf and len are valid once f is closed), then written whole. */
+static int write_stream(const char *path, char **buf, size_t *len, FILE *f, char *err, size_t errlen)
+{
+	int ret = fclose(f) == 0 ? mvod_write_replace(path, *buf, *len) : -ENOMEM;
+	free(*buf);
+	if (ret)
+		mvod_errf(err, errlen, ret, "cannot write %s: %s", path, strerror(-ret));
+	return ret;
+}
+
+/*
+ * ROS knows plumb_bob (5), rational_polynomial (8) and equidistant (4): fewer pinhole
+ * coefficients are padded with zeros, and the thin-prism and tilt terms of 12 or 14 are
+ * dropped only when they are zero.
+ */
+static int ros_distortion(const struct mvod_camera *cam, const char **model, int *n)
+{
+	if (cam->model == MVOD_CAM_FISHEYE_KB4) {
+		*model = "equidistant";
+		*n = 4;
+		return 0;
+	}
+	for (int i = 8; i < cam->n_dist; i++)
+		if (cam->dist[i] != 0)
+			return -EINVAL;
+	*model = cam->n_dist > 5 ? "rational_polynomial" : "plumb_bob";
+	*n = cam->n_dist > 5 ? 8 : 5;
+	return 0;
+}
+
+int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *err, size_t errlen)
+{
+	const char *model;
+	int n;
+	if (cam->width <= 0 || cam->height <= 0)
+		return mvod_errf(err, errlen, -EINVAL,
+			    "%s: ROS camera_info needs the image size, which the calibration lacks", path);
+	if (ros_distortion(cam, &model, &n))
+		return mvod_errf(err, errlen, -EINVAL,
+			    "%s: ROS camera_info has no model for non-zero thin-prism or tilt "
+			    "coefficients (the 9th and later)", path);
+	char *buf = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&buf, &len);
+	if (!f)
+		return mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
+	double dist[MVOD_MAX_DIST] = {0};
+	memcpy(dist, cam->dist, sizeof(double) * (size_t)cam->n_dist);
+	const double K[9] = {cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1};
+	const double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+	const double P[12] = {cam->fx, 0, cam->cx, 0, 0, cam->fy, cam->cy, 0, 0, 0, 1, 0};
+	fprintf(f, "image_width: %d\nimage_height: %d\ncamera_name: camera\n", cam->width, cam->height);
+	put_ros_matrix(f, "camera_matrix", 3, 3, K);
+	fprintf(f, "distortion_model: %s\n", model);
+	put_ros_matrix(f, "distortion_coefficients", 1, n, dist);
+	put_ros_matrix(f, "rectification_matrix", 3, 3, R);
+	put_ros_matrix(f, "projection_matrix", 3, 4, P);
+	return write_stream(path, &buf, &len, f, err, errlen);
+}
+
+int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char *err, size_t errlen)
+{
+	if (cam->model != MVOD_CAM_PINHOLE_RADTAN || mvod_camera_has_distortion(cam))
+		return mvod_errf(err, errlen, -EINVAL,
+			    "%s: KITTI calib.txt holds rectified (distortion-free) intrinsics only, and "
+			    "this camera has %s distortion", path, mvod_cam_model_name(cam->model));
+	char *buf = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&buf, &len);
+	if (!f)
+		return mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
+	/* One camera: every P is the same [K | 0], for readers that expect all four lines. */
+	const double P[12] = {cam->fx, 0, cam->cx, 0, 0, cam->fy, cam->cy, 0, 0, 0, 1, 0};
+	for (int i = 0; i < 4; i++) {
+		fprintf(f, "P%d: ", i);
+		put_numbers(f, P, 12, " ");
+		fputc('\n', f);
+	}
+	return write_stream(path, &buf, &len, f, err, errlen);
+}

@@ -1,0 +1,32 @@
+/* What the calibration readers and writers share inside src/calib/. */
+#ifndef MVOD_CALIB_INTERNAL_H
+#define MVOD_CALIB_INTERNAL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "mvod/calib.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Reads a whole (small) calibration file into a NUL-terminated malloc'ed buffer. */
+int mvod_calib_read_text(const char *path, char **out, char *err, size_t errlen);
+
+/*
+ * Takes fx, fy, cx, cy from a row-major K, which must be [fx 0 cx; 0 fy cy; 0 0 1] with finite
+ * entries and fx, fy > 0 (skew is not modelled). Returns 0 or -EINVAL; cam is untouched then.
+ */
+int mvod_calib_set_K(const double k[9], struct mvod_camera *cam);
+
+/* Whether n coefficients make sense for the model (pinhole: 0 4 5 8 12 14; fisheye: 4). */
+bool mvod_calib_dist_count_ok(enum mvod_cam_model model, int n);
+/* The same, as words for a message. */
+const char *mvod_calib_dist_counts(enum mvod_cam_model model);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
