@@ -215,8 +215,9 @@ int cli_parse_shared(int id, const char *arg, struct mvod_run_opts *o, int *quie
 	return parse_vo_option(id, arg, &o->vo);
 }
 
-int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
-	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet)
+int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
+		    void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet,
+		    const char **args, int nargs, const char *args_usage)
 {
 	struct option opts[CLI_MAX_OPTIONS];
 	cli_options_join(opts, o != NULL, own);
@@ -250,10 +251,23 @@ int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn
 		if (ret)
 			return -EINVAL;
 	}
-	if (optind < argc) {
-		fprintf(stderr, "%s: unexpected argument '%s'; see %s --help\n", cli_prog,
-			argv[optind], cli_prog);
+	/* GNU getopt has moved the operands behind the options, wherever the user put them. */
+	if (argc - optind != nargs) {
+		if (nargs)
+			fprintf(stderr, "%s: expected %s; see %s --help\n", cli_prog, args_usage,
+				cli_prog);
+		else
+			fprintf(stderr, "%s: unexpected argument '%s'; see %s --help\n", cli_prog,
+				argv[optind], cli_prog);
 		return -EINVAL;
 	}
+	for (int i = 0; i < nargs; i++)
+		args[i] = argv[optind + i];
 	return 0;
+}
+
+int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
+	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet)
+{
+	return cli_getopt_args(argc, argv, own, own_parse, ctx, usage, o, quiet, NULL, 0, NULL);
 }

@@ -58,6 +58,13 @@ int cli_parse_shared(int id, const char *arg, struct mvod_run_opts *o, int *quie
 typedef int (*cli_own_parse_fn)(int id, const char *arg, void *ctx);
 int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
 	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet);
+/*
+ * The same for a command that takes exactly nargs operands (anywhere among the options): they
+ * land in args[0..nargs-1]; a different count is a usage error naming args_usage ("IN and OUT").
+ */
+int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
+		    void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet,
+		    const char **args, int nargs, const char *args_usage);
 
 /* Subcommands: argv[0] is the subcommand's name. Return the process exit status. */
 int mvod_cmd_run(int argc, char **argv);

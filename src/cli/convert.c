@@ -101,25 +101,16 @@ static int format_from_name(const char *path, enum mvod_calib_format *fmt)
 	return 0;
 }
 
-/* IN and OUT come first, so that the shared option loop sees options only. */
 static int parse_cli(int argc, char **argv, struct convert *c)
 {
-	if (argc >= 3 && argv[1][0] != '-' && argv[2][0] != '-') {
-		c->in = argv[1];
-		c->out = argv[2];
-		argv[2] = argv[0]; /* the options follow their command's name, as getopt expects */
-		argv += 2;
-		argc -= 2;
-	}
 	int quiet = 0;
-	int ret = cli_getopt(argc, argv, convert_opts, parse_own, c, usage, NULL, &quiet);
+	const char *files[2];
+	int ret = cli_getopt_args(argc, argv, convert_opts, parse_own, c, usage, NULL, &quiet, files,
+				  2, "IN and OUT, e.g. mvod calib-convert cam.yaml calib.json");
 	if (ret)
 		return ret;
-	if (!c->in) {
-		fprintf(stderr, "%s: IN and OUT come first, e.g. mvod calib-convert cam.yaml calib.json; "
-				"see %s --help\n", cli_prog, cli_prog);
-		return -EINVAL;
-	}
+	c->in = files[0];
+	c->out = files[1];
 	if (!c->to_given && format_from_name(c->out, &c->to)) {
 		fprintf(stderr, "%s: cannot tell the format from the name %s: give --to "
 				"mvod|opencv|ros|kitti\n", cli_prog, c->out);
