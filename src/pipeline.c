@@ -47,6 +47,7 @@ struct run {
 	struct mvod_capture *cap;          /* live sources: their capture thread */
 	int epoch;                         /* times the live source came back */
 	int64_t last_index;                /* of the last frame processed, -1 before */
+	bool status_due;                   /* publish status with the next frame */
 	int traj_failed;
 	int plot_aligned; /* the plotted estimate was Sim(3)-aligned to the ground truth */
 };
@@ -198,6 +199,7 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 		st.stage_ms[k] = r->stage_total[k] / n;
 	mvod_ipc_publish_status(r->ipc, &st);
 	r->last_status = now;
+	r->status_due = false;
 }
 
 static void record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
@@ -215,6 +217,7 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 		    mvod_track_state_name(r->state), mvod_track_state_name(res->state),
 		    mvod_frame_status_name(res->status));
 		r->state = res->state;
+		r->status_due = true; /* a state change is news: status goes out with this frame */
 	}
 	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)",
 	    (long long)f->index, mvod_frame_status_name(res->status), res->features, res->matches,
@@ -237,7 +240,7 @@ static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo
 {
 	if (r->ipc) {
 		mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res);
-		if (r->sum->frames == 1 || now_s() - r->last_status >= 1.0)
+		if (r->status_due || now_s() - r->last_status >= 1.0)
 			publish_status(r, f, res);
 	}
 	if (r->traj && !r->traj_failed) {
