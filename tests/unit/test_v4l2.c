@@ -65,8 +65,9 @@ static struct fake {
 	struct script_frame frames[MAX_FRAMES];
 	int n_frames;
 	volatile sig_atomic_t *done; /* raised once every frame was dequeued */
+	volatile sig_atomic_t *stop_when_down; /* raised by the second reopen refused */
 
-	int next, eagain_left, interrupts, opens, mapped, idle_polls;
+	int next, eagain_left, interrupts, opens, mapped, idle_polls, refused;
 	bool interrupted, gone;
 	unsigned nbuf;
 	bool queued[MAX_BUFS];
@@ -89,6 +90,9 @@ static int fake_open(const char *path, int flags)
 {
 	(void)flags;
 	if (strcmp(path, DEV) != 0 || (F.gone && F.fail_opens-- > 0)) {
+		/* A stop while the device is away: raised on the second refused reopen. */
+		if (F.gone && F.stop_when_down && ++F.refused == 2)
+			*F.stop_when_down = 1;
 		errno = ENOENT;
 		return -1;
 	}
@@ -664,6 +668,36 @@ static int index_of(const struct statuses *s, int8_t state, int from)
 	return -1;
 }
 
+/* A full run (mvod_run over memq) on the fake device until *stop, with its statuses. */
+static void run_fake(volatile sig_atomic_t *stop, struct statuses *got,
+		     struct mvod_run_summary *sum)
+{
+	char calib[64] = "/tmp/mvod-test-v4l2-XXXXXX";
+	int fd = mkstemp(calib);
+	assert_true(fd >= 0);
+	close(fd);
+	struct mvod_camera cam = {.width = W, .height = H, .fx = 50, .fy = 50, .cx = W / 2.0,
+				  .cy = H / 2.0};
+	assert_int_equal(mvod_calib_save(calib, &cam, NULL), 0);
+
+	lcm_t *lcm = lcm_create("memq://");
+	assert_non_null(lcm);
+	mvod_status_t_subscription_t *sub = mvod_status_t_subscribe(lcm, "S", on_status, got);
+	struct mvod_ipc *ipc;
+	assert_int_equal(mvod_ipc_create_on(lcm, "P", "S", &ipc), 0);
+	struct mvod_run_opts o;
+	mvod_run_opts_default(&o);
+	o.source = "v4l2:" DEV "?width=64&height=48&format=GREY";
+	o.calib = calib;
+	assert_int_equal(mvod_run(&o, ipc, stop, sum), 0);
+	while (lcm_handle_timeout(lcm, 0) > 0)
+		;
+	unlink(calib);
+	mvod_ipc_destroy(ipc);
+	mvod_status_t_unsubscribe(lcm, sub);
+	lcm_destroy(lcm);
+}
+
 /*
  * The device vanishes after 6 frames (ENODEV), refuses the first reopen, and comes back with
  * 6 more: the run reports SOURCE_DOWN, tracks again, and every frame is processed or counted.
@@ -681,30 +715,9 @@ static void test_unplug_and_return(void **state)
 	static volatile sig_atomic_t stop;
 	stop = 0;
 	F.done = &stop;
-
-	char calib[64] = "/tmp/mvod-test-v4l2-XXXXXX";
-	int fd = mkstemp(calib);
-	assert_true(fd >= 0);
-	close(fd);
-	struct mvod_camera cam = {.width = W, .height = H, .fx = 50, .fy = 50, .cx = W / 2.0,
-				  .cy = H / 2.0};
-	assert_int_equal(mvod_calib_save(calib, &cam, NULL), 0);
-
-	lcm_t *lcm = lcm_create("memq://");
-	assert_non_null(lcm);
 	struct statuses got = {0};
-	mvod_status_t_subscription_t *sub = mvod_status_t_subscribe(lcm, "S", on_status, &got);
-	struct mvod_ipc *ipc;
-	assert_int_equal(mvod_ipc_create_on(lcm, "P", "S", &ipc), 0);
-	struct mvod_run_opts o;
-	mvod_run_opts_default(&o);
-	o.source = "v4l2:" DEV "?width=64&height=48&format=GREY";
-	o.calib = calib;
 	struct mvod_run_summary sum;
-	assert_int_equal(mvod_run(&o, ipc, &stop, &sum), 0);
-	while (lcm_handle_timeout(lcm, 0) > 0)
-		;
-	unlink(calib);
+	run_fake(&stop, &got, &sum);
 	assert_int_equal(F.opens, 2); /* the first and the one after the refusal */
 	assert_true(sum.live);
 	assert_int_equal(sum.frames + sum.dropped, 12);
@@ -714,9 +727,28 @@ static void test_unplug_and_return(void **state)
 	assert_int_equal(got.last.state, MVOD_STATE_STOPPING);
 	assert_int_equal(got.last.frames, sum.frames);
 	assert_int_equal(got.last.dropped_frames, sum.dropped);
-	mvod_ipc_destroy(ipc);
-	mvod_status_t_unsubscribe(lcm, sub);
-	lcm_destroy(lcm);
+}
+
+/* A stop that comes while the device is away ends the run (it would hang here otherwise). */
+static void test_stop_while_down(void **state)
+{
+	(void)state;
+	reset(V4L2_PIX_FMT_GREY);
+	for (int i = 0; i < 3; i++)
+		add_frame(i, (uint32_t)i);
+	add_gone();
+	F.fail_opens = 1000;
+	static volatile sig_atomic_t stop;
+	stop = 0;
+	F.stop_when_down = &stop;
+	struct statuses got = {0};
+	struct mvod_run_summary sum;
+	run_fake(&stop, &got, &sum);
+	assert_int_equal(F.refused, 2);
+	assert_int_equal(F.opens, 1);
+	assert_true(index_of(&got, MVOD_STATE_SOURCE_DOWN, 0) >= 0);
+	assert_int_equal(got.last.state, MVOD_STATE_STOPPING);
+	assert_int_equal(sum.frames + sum.dropped, 3);
 }
 
 int main(void)
@@ -732,6 +764,7 @@ int main(void)
 		cmocka_unit_test(test_lens_and_exposure),
 		cmocka_unit_test(test_list),
 		cmocka_unit_test(test_unplug_and_return),
+		cmocka_unit_test(test_stop_while_down),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
