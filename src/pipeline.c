@@ -17,6 +17,9 @@
 /* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
 #define PATH_POINTS 20000
 
+/* How long the live loop waits for a frame before it looks at the stop flag again. */
+#define LIVE_WAIT_MS 100
+
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
 	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM};
@@ -39,6 +42,12 @@ struct run {
 	double stage_total[MVOD_STAGE_COUNT];
 	double t_start, last_status;
 	enum mvod_track_state state;
+	struct mvod_frame last_frame;      /* for status messages sent between frames */
+	struct mvod_vo_result last_res;
+	struct mvod_capture *cap;          /* live sources: their capture thread */
+	int epoch;                         /* times the live source came back */
+	int64_t last_index;                /* of the last frame processed, -1 before */
+	bool status_due;                   /* publish status with the next frame */
 	int traj_failed;
 	int plot_aligned; /* the plotted estimate was Sim(3)-aligned to the ground truth */
 };
@@ -93,6 +102,9 @@ static int open_camera(struct run *r)
 		    r->cam.width, r->cam.height, o->source, r->info.width, r->info.height);
 		return -EINVAL;
 	}
+	/* Recorded so that a calibration made at another focus can be told apart. */
+	if (!isnan(r->info.focus))
+		LOG(INFO, "%s: autofocus off, focus held at %g", o->source, r->info.focus);
 	return 0;
 }
 
@@ -170,6 +182,7 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 {
 	struct mvod_run_summary *s = r->sum;
 	double now = now_s();
+	double n = s->frames ? (double)s->frames : 1;
 	struct mvod_status st = {
 		.utime = f->utime,
 		.fps = s->frames / fmax(now - r->t_start, 1e-9),
@@ -177,15 +190,16 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 		.matches = res->matches,
 		.inliers = res->inliers,
 		.frames = s->frames,
-		.dropped = 0,
+		.dropped = s->dropped,
 		.rss_kb = rss_kb(),
 		.uptime_s = now - r->t_start,
-		.state = res->state,
+		.state = r->state,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
-		st.stage_ms[k] = r->stage_total[k] / (double)s->frames;
+		st.stage_ms[k] = r->stage_total[k] / n;
 	mvod_ipc_publish_status(r->ipc, &st);
 	r->last_status = now;
+	r->status_due = false;
 }
 
 static void record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
@@ -203,6 +217,7 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 		    mvod_track_state_name(r->state), mvod_track_state_name(res->state),
 		    mvod_frame_status_name(res->status));
 		r->state = res->state;
+		r->status_due = true; /* a state change is news: status goes out with this frame */
 	}
 	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)",
 	    (long long)f->index, mvod_frame_status_name(res->status), res->features, res->matches,
@@ -225,7 +240,7 @@ static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo
 {
 	if (r->ipc) {
 		mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res);
-		if (r->sum->frames == 1 || now_s() - r->last_status >= 1.0)
+		if (r->status_due || now_s() - r->last_status >= 1.0)
 			publish_status(r, f, res);
 	}
 	if (r->traj && !r->traj_failed) {
@@ -256,13 +271,20 @@ static int process_frame(struct run *r, const struct mvod_frame *f, double captu
 	res.ms[MVOD_STAGE_CAPTURE] = capture_ms;
 	record(r, f, &res, gt);
 	emit(r, f, &res);
+	r->last_frame = *f;
+	r->last_res = res;
 	return 0;
+}
+
+static bool stopped(const struct run *r, volatile sig_atomic_t *stop)
+{
+	return (stop && *stop) || (r->o->max_frames && r->sum->frames >= r->o->max_frames);
 }
 
 static int loop(struct run *r, volatile sig_atomic_t *stop)
 {
 	int skipped = 0;
-	while (!(stop && *stop) && !(r->o->max_frames && r->sum->frames >= r->o->max_frames)) {
+	while (!stopped(r, stop)) {
 		struct mvod_frame f;
 		double t0 = now_s();
 		int ret = mvod_source_read(r->src, &f);
@@ -287,6 +309,82 @@ static int loop(struct run *r, volatile sig_atomic_t *stop)
 			return ret;
 	}
 	return 0;
+}
+
+/* While the capture thread reopens a source that went away, status says so every second. */
+static void report_down(struct run *r)
+{
+	if (!mvod_capture_down(r->cap))
+		return;
+	bool changed = r->state != MVOD_STATE_SOURCE_DOWN;
+	if (changed)
+		LOG(INFO, "%s -> %s", mvod_track_state_name(r->state),
+		    mvod_track_state_name(MVOD_STATE_SOURCE_DOWN));
+	r->state = MVOD_STATE_SOURCE_DOWN;
+	if (r->ipc && (changed || now_s() - r->last_status >= 1.0))
+		publish_status(r, &r->last_frame, &r->last_res);
+}
+
+/* The source came back: what the VO knew of the scene is stale, so tracking starts over. */
+static int restart_vo(struct run *r, int epoch)
+{
+	mvod_vo_destroy(r->vo);
+	r->vo = NULL;
+	int ret = mvod_vo_create(&r->o->vo, &r->cam, &r->vo);
+	if (ret)
+		LOG(ERROR, "cannot set up visual odometry again: %s", strerror(-ret));
+	r->epoch = epoch;
+	r->prev_had_gt = 0;
+	return ret;
+}
+
+/*
+ * Frames from a live source's capture thread, the newest each time. Frame numbers count every
+ * frame the source produced, so a gap is exactly the frames dropped, by the driver or because
+ * processing fell behind.
+ */
+static int live_loop(struct run *r, volatile sig_atomic_t *stop)
+{
+	int ret = mvod_capture_start(r->src, r->o->source, &r->cap);
+	if (ret) {
+		LOG(ERROR, "%s: cannot start the capture thread: %s", r->o->source, strerror(-ret));
+		return ret;
+	}
+	r->src = NULL; /* the capture thread's now */
+	r->sum->live = true;
+	while (!stopped(r, stop)) {
+		struct mvod_frame f;
+		int epoch;
+		double t0 = now_s();
+		ret = mvod_capture_next(r->cap, LIVE_WAIT_MS, &f, &epoch);
+		if (ret == -EAGAIN) {
+			report_down(r);
+			continue;
+		}
+		if (ret == -ENODATA)
+			return 0;
+		if (ret) {
+			LOG(ERROR, "%s: reading frames failed: %s", r->o->source, strerror(-ret));
+			return ret;
+		}
+		if (epoch != r->epoch && (ret = restart_vo(r, epoch)))
+			return ret;
+		r->sum->dropped += f.index - r->last_index - 1;
+		r->last_index = f.index;
+		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
+		if (ret)
+			return ret;
+	}
+	return 0;
+}
+
+/* The last status: what was processed and dropped in all, and that mvod is stopping. */
+static void report_stop(struct run *r)
+{
+	if (!r->ipc || !r->sum->frames)
+		return;
+	r->state = MVOD_STATE_STOPPING;
+	publish_status(r, &r->last_frame, &r->last_res);
 }
 
 /*
@@ -345,14 +443,17 @@ static int write_plot(struct run *r)
 int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile sig_atomic_t *stop,
 	     struct mvod_run_summary *summary)
 {
-	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_STATE_STARTING};
+	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_STATE_STARTING,
+			.last_index = -1};
 	memset(summary, 0, sizeof(*summary));
 	int ret = open_inputs(&r);
 	if (!ret)
 		ret = open_outputs(&r);
 	if (!ret) {
 		r.t_start = now_s();
-		ret = loop(&r, stop);
+		ret = r.info.live ? live_loop(&r, stop) : loop(&r, stop);
+		mvod_capture_stop(r.cap);
+		report_stop(&r);
 		summarise(&r);
 		int pret = write_plot(&r);
 		if (!ret)

@@ -1,11 +1,13 @@
 /*
- * Frame sources, chosen by URI scheme (file:, images:, kitti:). Each backend is a
- * const struct mvod_source_ops, the way LCM picks a provider from its URL.
+ * Frame sources, chosen by URI scheme (file:, images:, kitti:, v4l2:, libcamera:). Each
+ * backend is a const struct mvod_source_ops, the way LCM picks a provider from its URL.
  */
 #ifndef MVOD_CAPTURE_H
 #define MVOD_CAPTURE_H
 
+#include <stdbool.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdint.h>
 
 #include "mvod/calib.h"
@@ -25,6 +27,13 @@ struct mvod_source_info {
 	int width, height; /* pixels of every frame the source will deliver */
 	double fps;        /* nominal rate; 0 when unknown */
 	int64_t frames;    /* total frames when known, else -1 */
+	/*
+	 * Frames come at their own pace (a camera, file:?realtime=1): read them on a capture
+	 * thread and drop what processing cannot keep up with. Otherwise every frame is processed.
+	 */
+	bool live;
+	/* Lens focus position the camera was locked at (device units); NaN when unknown. */
+	double focus;
 };
 
 struct mvod_source_ops {
@@ -33,7 +42,11 @@ struct mvod_source_ops {
 	size_t priv_size;     /* bytes of backend state, zeroed before open */
 	/* location is the URI without "scheme:". Returns 0 or -errno with a reason in err. */
 	int (*open)(void *priv, const char *location, char *err, size_t errlen);
-	/* 0 = a frame, -ENODATA = end of stream, -EAGAIN = no frame yet, other -errno = failure. */
+	/*
+	 * 0 = a frame, -ENODATA = end of stream, -EAGAIN = no frame yet, -EINVAL = one bad frame
+	 * (skipped), -ENODEV = the device is gone (a live source is reopened), other -errno =
+	 * failure.
+	 */
 	int (*read)(void *priv, struct mvod_frame *frame);
 	void (*info)(void *priv, struct mvod_source_info *info);
 	/* Intrinsics the source carries (KITTI calib.txt); -ENOENT when it has none. May be NULL. */
@@ -53,6 +66,35 @@ void mvod_source_close(struct mvod_source *src);
 
 /* The registered backends, NULL-terminated (for --help and tests). */
 extern const struct mvod_source_ops *const mvod_source_backends[];
+
+/*
+ * Prints the cameras attached (V4L2 capture devices with their formats, sizes and rates;
+ * libcamera cameras), each with the --source URI that opens it. Returns how many.
+ */
+int mvod_capture_list_cameras(FILE *out);
+
+/*
+ * A live source read on its own thread. The newest frame waits in a single-slot mailbox of
+ * preallocated buffers; a frame that a newer one replaces before it was taken is dropped (it
+ * leaves a gap in the frame indices the consumer sees). A source whose device is gone
+ * (-ENODEV: a camera unplugged) is closed, reported once, and reopened from its URI with
+ * backoff, 0.5 s doubling to 8 s; frame indices go on from where they were.
+ */
+struct mvod_capture;
+
+/* On success owns src (open, live) and reads it; uri reopens it after a failure. */
+int mvod_capture_start(struct mvod_source *src, const char *uri, struct mvod_capture **out);
+/*
+ * The newest frame, waiting up to timeout_ms. 0 with the frame (valid until the next call) and
+ * *epoch, the number of times the source has come back before it; -EAGAIN when none came;
+ * once every frame was taken, -ENODATA when the source ended or its -errno when it failed.
+ */
+int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame *frame,
+		      int *epoch);
+/* The source is down and being reopened. */
+bool mvod_capture_down(struct mvod_capture *c);
+/* Stops the thread promptly (even while reopening), closes the source, frees. NULL: no-op. */
+void mvod_capture_stop(struct mvod_capture *c);
 
 #ifdef __cplusplus
 }

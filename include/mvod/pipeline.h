@@ -3,6 +3,7 @@
 #define MVOD_PIPELINE_H
 
 #include <signal.h>
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "mvod/eval.h"
@@ -29,6 +30,8 @@ void mvod_run_opts_default(struct mvod_run_opts *o);
 /* Summary of a finished run (printed by the daemon, asserted by tests). */
 struct mvod_run_summary {
 	int64_t frames, tracked, held;
+	bool live;       /* frames came through the capture thread */
+	int64_t dropped; /* frames a live source produced that were not processed */
 	double wall_s, fps;
 	double stage_ms_mean[MVOD_STAGE_COUNT];
 	double stage_ms_max[MVOD_STAGE_COUNT];

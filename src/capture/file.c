@@ -1,4 +1,8 @@
-/* file:PATH, any video FFmpeg reads, decoded through the OpenCV shim. */
+/*
+ * file:PATH[?realtime=1], any video FFmpeg reads, decoded through the OpenCV shim. realtime=1
+ * hands frames out no faster than their media times, as a camera would, so that the live path
+ * (capture thread, mailbox, dropped frames) runs without one.
+ */
 #include "capture/backends.h"
 
 #include <errno.h>
@@ -6,8 +10,10 @@
 #include <stdbool.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
+#include "capture/uri.h"
 #include "capture/video_shim.h"
 
 /*
@@ -17,6 +23,9 @@
  */
 #define END_SLACK_S 0.5
 
+/* A realtime read waits at most this long before answering "no frame yet", to stay stoppable. */
+#define PACE_SLICE_US 100000
+
 struct file_source {
 	struct mvod_video *video;
 	struct mvod_source_info info;
@@ -24,7 +33,31 @@ struct file_source {
 	int64_t last_us;   /* time of the previous frame */
 	int64_t period_us; /* nominal frame period */
 	int64_t short_of;  /* a stream ending before this many frames is broken; <0 = unknown */
+	char path[4096];
+	bool realtime;
+	bool pending;          /* held is decoded and waits for its time */
+	struct mvod_frame held;
+	int64_t wall0_us;      /* monotonic time the first frame was handed out */
+	int64_t media0_us;     /* its media time */
 };
+
+static int64_t now_us(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+}
+
+static int take_param(void *ctx, const char *key, const char *value, char *err, size_t errlen)
+{
+	struct file_source *fs = ctx;
+	if (strcmp(key, "realtime") != 0)
+		return mvod_uri_unknown(key, "realtime", err, errlen);
+	long on;
+	int ret = mvod_uri_int(key, value, 0, 1, &on, err, errlen);
+	fs->realtime = on;
+	return ret;
+}
 
 /* A readable regular file, or one line saying what is wrong. */
 static int check_file(const char *path, char *err, size_t errlen)
@@ -42,10 +75,13 @@ static int check_file(const char *path, char *err, size_t errlen)
 	return 0;
 }
 
-static int file_open(void *priv, const char *path, char *err, size_t errlen)
+static int file_open(void *priv, const char *location, char *err, size_t errlen)
 {
 	struct file_source *fs = priv;
-	int ret = check_file(path, err, errlen);
+	const char *path = fs->path;
+	int ret = mvod_uri_parse(location, fs->path, sizeof(fs->path), take_param, fs, err, errlen);
+	if (ret == 0)
+		ret = check_file(path, err, errlen);
 	if (ret < 0)
 		return ret;
 	ret = mvod_video_open(path, &fs->video);
@@ -61,15 +97,15 @@ static int file_open(void *priv, const char *path, char *err, size_t errlen)
 	/* Any strictly increasing time will do when the rate is unknown. */
 	fs->period_us = fs->info.fps > 0 ? llround(1e6 / fs->info.fps) : 1;
 	fs->short_of = fs->info.frames - (int64_t)ceil(END_SLACK_S * fs->info.fps);
+	fs->info.live = fs->realtime;
 	return 0;
 fail:
 	mvod_video_close(fs->video);
 	return ret;
 }
 
-static int file_read(void *priv, struct mvod_frame *frame)
+static int decode_next(struct file_source *fs, struct mvod_frame *frame)
 {
-	struct file_source *fs = priv;
 	int64_t media_us = 0;
 	int ret = mvod_video_read(fs->video, &frame->img, &media_us);
 	if (ret == -ENODATA && fs->next < fs->short_of)
@@ -85,6 +121,37 @@ static int file_read(void *priv, struct mvod_frame *frame)
 	frame->utime = advances ? media_us : fs->last_us + fs->period_us;
 	fs->last_us = frame->utime;
 	return 0;
+}
+
+/* The held frame once its media time has come, measured from the first frame's. */
+static int paced_read(struct file_source *fs, struct mvod_frame *frame)
+{
+	if (!fs->pending) {
+		int ret = decode_next(fs, &fs->held);
+		if (ret < 0)
+			return ret;
+		fs->pending = true;
+		if (fs->held.index == 0) {
+			fs->wall0_us = now_us();
+			fs->media0_us = fs->held.utime;
+		}
+	}
+	int64_t wait = fs->wall0_us + (fs->held.utime - fs->media0_us) - now_us();
+	if (wait > PACE_SLICE_US) {
+		usleep(PACE_SLICE_US);
+		return -EAGAIN;
+	}
+	if (wait > 0)
+		usleep((useconds_t)wait);
+	*frame = fs->held;
+	fs->pending = false;
+	return 0;
+}
+
+static int file_read(void *priv, struct mvod_frame *frame)
+{
+	struct file_source *fs = priv;
+	return fs->realtime ? paced_read(fs, frame) : decode_next(fs, frame);
 }
 
 static void file_info(void *priv, struct mvod_source_info *info)

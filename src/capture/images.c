@@ -264,6 +264,7 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
 	if (ret < 0)
 		goto fail;
 	im->info.frames = (int64_t)im->n;
+	im->info.focus = NAN;
 	im->info.fps = im->times_us ? times_fps(im->times_us, im->n) : 1e6 / DEFAULT_PERIOD_US;
 	if (!im->times_us)
 		LOG(WARN, "%s not found: timestamps assume 10 Hz", times_path);

@@ -8,13 +8,27 @@
 #include <sys/stat.h>
 
 #include "capture/backends.h"
+#include "capture/libcamera_shim.h"
+#include "capture/v4l2.h"
 
 const struct mvod_source_ops *const mvod_source_backends[] = {
 	&mvod_source_file_ops,
 	&mvod_source_images_ops,
 	&mvod_source_kitti_ops,
+	&mvod_source_v4l2_ops,
+	&mvod_source_libcamera_ops,
 	NULL,
 };
+
+int mvod_capture_list_cameras(FILE *out)
+{
+	int n = mvod_v4l2_list(out);
+	n += mvod_lcam_list(out);
+	if (n == 0)
+		fprintf(out, "No cameras found: no V4L2 capture device in /dev/video*, and no "
+			     "libcamera camera.\n");
+	return n;
+}
 
 struct mvod_source {
 	const struct mvod_source_ops *ops;

@@ -25,6 +25,7 @@ static void usage(FILE *out)
 {
 	fprintf(out,
 "Usage: mvod [run] --source URI [options]\n"
+"       mvod --list-cameras\n"
 "       mvod calibrate|board|calib-convert|bench ...   (mvod COMMAND --help)\n"
 "Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
 "\n");
@@ -40,6 +41,10 @@ static void usage(FILE *out)
 "  --trajectory FILE     write every pose to FILE (complete lines only, even if killed)\n"
 "  --format tum|kitti    trajectory format (default: kitti for *.kitti, else tum)\n"
 "  --plot FILE.png       top-down plot of the path (with ground truth when --gt is given)\n"
+"\n"
+"Cameras:\n"
+"  --list-cameras        list the V4L2 and libcamera cameras attached, their formats, sizes\n"
+"                        and rates, each with the --source URI that opens it; then exit\n"
 "\n");
 	cli_usage_general(out);
 	fprintf(out,
@@ -50,7 +55,9 @@ static void usage(FILE *out)
 "  calib-convert IN OUT  convert OpenCV/ROS/KITTI calibration files to mvod JSON\n"
 "  bench                 measure accuracy and speed against ground truth\n"
 "\n"
-"Example:\n"
+"Examples:\n"
+"  mvod --source 'v4l2:/dev/video0?width=640&height=480&fps=30&format=YUYV' \\\n"
+"       --calib webcam.json --lcm-url memq://\n"
 "  mvod --source kitti:data/sequences/06 --gt data/poses/06.txt --scale gt \\\n"
 "       --trajectory out.kitti --format kitti --plot out.png --lcm-url memq://\n"
 "\n"
@@ -59,7 +66,7 @@ static void usage(FILE *out)
 
 enum run_opt_id {
 	OPT_LCM_URL = CLI_OPT_OWN, OPT_NO_LCM, OPT_POSE_CH, OPT_STATUS_CH, OPT_TRAJ, OPT_FORMAT,
-	OPT_PLOT,
+	OPT_PLOT, OPT_LIST_CAMERAS,
 };
 
 static const struct option run_own_opts[] = {
@@ -70,13 +77,14 @@ static const struct option run_own_opts[] = {
 	{"trajectory", required_argument, NULL, OPT_TRAJ},
 	{"format", required_argument, NULL, OPT_FORMAT},
 	{"plot", required_argument, NULL, OPT_PLOT},
+	{"list-cameras", no_argument, NULL, OPT_LIST_CAMERAS},
 	{NULL, 0, NULL, 0},
 };
 
 struct cli {
 	struct mvod_run_opts run;
 	const char *lcm_url, *pose_ch, *status_ch;
-	int no_lcm, quiet, format_given;
+	int no_lcm, quiet, format_given, list_cameras;
 };
 
 static int parse_own(int id, const char *arg, void *ctx)
@@ -95,6 +103,7 @@ static int parse_own(int id, const char *arg, void *ctx)
 			       ? cli_bad_value("format", arg, "tum or kitti")
 			       : 0;
 	case OPT_PLOT: r->plot = arg; return 0;
+	case OPT_LIST_CAMERAS: c->list_cameras = 1; return 0;
 	}
 	return -ENOENT;
 }
@@ -104,7 +113,7 @@ static int parse_cli(int argc, char **argv, struct cli *c)
 {
 	mvod_run_opts_default(&c->run);
 	int ret = cli_getopt(argc, argv, run_own_opts, parse_own, c, usage, &c->run, &c->quiet);
-	if (ret)
+	if (ret || c->list_cameras)
 		return ret;
 	if (!c->run.source) {
 		fprintf(stderr, "mvod: --source URI is required, e.g. --source file:video.mkv; "
@@ -118,8 +127,11 @@ static int parse_cli(int argc, char **argv, struct cli *c)
 
 static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 {
-	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held\n",
+	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held",
 	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held);
+	if (s->live)
+		printf(", %lld dropped", (long long)s->dropped);
+	printf("\n");
 	printf("mvod: ms per frame, mean (max):");
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		printf(" %s %.2f (%.1f)", mvod_stage_names[k], s->stage_ms_mean[k], s->stage_ms_max[k]);
@@ -139,13 +151,16 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 }
 
 /*
- * FFmpeg prints its own diagnostics for a corrupt file before mvod can say which file and what
- * to do; keep them for --log-level debug. A value the user exported wins.
+ * FFmpeg and libcamera print their own diagnostics (a corrupt file, every camera probed) before
+ * mvod can say which source and what to do; keep them for --log-level debug. A value the user
+ * exported wins.
  */
-static void quiet_ffmpeg(void)
+static void quiet_libraries(void)
 {
-	if (mvod_log_get_level() < MVOD_LOG_DEBUG)
-		setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
+	if (mvod_log_get_level() >= MVOD_LOG_DEBUG)
+		return;
+	setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
+	setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
 }
 
 int mvod_cmd_run(int argc, char **argv)
@@ -154,7 +169,11 @@ int mvod_cmd_run(int argc, char **argv)
 	int ret = parse_cli(argc, argv, &c);
 	if (ret)
 		return ret > 0 ? 0 : EXIT_USAGE;
-	quiet_ffmpeg();
+	quiet_libraries();
+	if (c.list_cameras) {
+		mvod_capture_list_cameras(stdout);
+		return EXIT_SUCCESS;
+	}
 	struct sigaction sa = {.sa_handler = on_signal};
 	sigaction(SIGINT, &sa, NULL);
 	sigaction(SIGTERM, &sa, NULL);

@@ -1,0 +1,211 @@
+/* The capture thread of live sources: read, copy into the mailbox, reopen what went down. */
+#include "mvod/capture.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "capture/mailbox.h"
+#include "mvod/log.h"
+
+#define BACKOFF_FIRST_MS 500
+#define BACKOFF_MAX_MS 8000
+
+struct mvod_capture {
+	struct mvod_source *src;      /* NULL while down; the capture thread's alone once started */
+	char *uri;
+	struct mvod_source_info info; /* of the first open: a reopened source must match it */
+	struct mvod_mailbox mb;
+	pthread_t thread;
+	pthread_mutex_t lock;         /* guards stop; wake interrupts the backoff */
+	pthread_cond_t wake;
+	bool stop;
+	atomic_bool down;
+	int epoch;                    /* times the source came back */
+	int backoff_ms;
+	int64_t base;                 /* added to the source's indices: a reopened one starts at 0 */
+	int64_t last;                 /* index of the last frame posted */
+	bool warned_bad;
+};
+
+static bool stopping(struct mvod_capture *c)
+{
+	pthread_mutex_lock(&c->lock);
+	bool s = c->stop;
+	pthread_mutex_unlock(&c->lock);
+	return s;
+}
+
+/* Sleeps ms, or less when stopped; true when stopped. */
+static bool sleep_unless_stopped(struct mvod_capture *c, int ms)
+{
+	struct timespec until = mvod_mailbox_deadline(ms);
+	pthread_mutex_lock(&c->lock);
+	while (!c->stop && pthread_cond_timedwait(&c->wake, &c->lock, &until) != ETIMEDOUT)
+		;
+	bool s = c->stop;
+	pthread_mutex_unlock(&c->lock);
+	return s;
+}
+
+static void deliver(struct mvod_capture *c, const struct mvod_frame *f)
+{
+	struct mvod_letter *l = mvod_mailbox_back(&c->mb);
+	const struct mvod_image *in = &f->img;
+	size_t row = (size_t)in->w * (in->fmt == MVOD_PIX_BGR ? 3 : 1);
+	uint8_t *data = l->frame.img.data;
+	for (int y = 0; y < in->h; y++)
+		memcpy(data + (size_t)y * row, in->data + (size_t)y * (size_t)in->stride, row);
+	l->frame.img = (struct mvod_image){.w = in->w, .h = in->h, .stride = (int)row,
+					   .fmt = in->fmt, .data = data};
+	l->frame.utime = f->utime;
+	l->frame.index = c->base + f->index;
+	l->epoch = c->epoch;
+	c->last = l->frame.index;
+	mvod_mailbox_post(&c->mb);
+}
+
+static void lose(struct mvod_capture *c)
+{
+	LOG(ERROR, "%s: the device is gone; reopening it until it returns", c->uri);
+	mvod_source_close(c->src);
+	c->src = NULL;
+	c->base = c->last + 1;
+	c->backoff_ms = BACKOFF_FIRST_MS;
+	atomic_store(&c->down, true);
+}
+
+/* One attempt after the backoff; the outcome of each is a debug line, the return one info line. */
+static void reopen(struct mvod_capture *c)
+{
+	if (sleep_unless_stopped(c, c->backoff_ms))
+		return;
+	c->backoff_ms = c->backoff_ms * 2 > BACKOFF_MAX_MS ? BACKOFF_MAX_MS : c->backoff_ms * 2;
+	char err[512] = "";
+	struct mvod_source *src;
+	int ret = mvod_source_open(c->uri, &src, err, sizeof(err));
+	if (ret) {
+		LOG(DEBUG, "%s: still down: %s", c->uri, err);
+		return;
+	}
+	struct mvod_source_info info;
+	mvod_source_info(src, &info);
+	if (info.width != c->info.width || info.height != c->info.height) {
+		LOG(DEBUG, "%s: came back at %dx%d, not %dx%d; waiting for it", c->uri, info.width,
+		    info.height, c->info.width, c->info.height);
+		mvod_source_close(src);
+		return;
+	}
+	c->src = src;
+	c->epoch++;
+	atomic_store(&c->down, false);
+	LOG(INFO, "%s: the source is back; tracking starts over", c->uri);
+}
+
+/* A frame, or why there is none: -EAGAIN and -EINVAL (one bad frame) go on, others end. */
+static int step(struct mvod_capture *c)
+{
+	if (!c->src) {
+		reopen(c);
+		return -EAGAIN;
+	}
+	struct mvod_frame f = {0};
+	int ret = mvod_source_read(c->src, &f);
+	if (ret == 0)
+		deliver(c, &f);
+	if (ret == -EINVAL && !c->warned_bad)
+		LOG(WARN, "%s: skipping frames that cannot be decoded at their size (counted as "
+			  "dropped)", c->uri);
+	c->warned_bad |= ret == -EINVAL;
+	if (ret != -ENODEV)
+		return ret;
+	lose(c);
+	return -EAGAIN;
+}
+
+static void *run(void *arg)
+{
+	struct mvod_capture *c = arg;
+	int ret = 0;
+	while (!stopping(c) && (ret == 0 || ret == -EAGAIN || ret == -EINVAL))
+		ret = step(c);
+	mvod_mailbox_close(&c->mb, ret < 0 && ret != -EAGAIN && ret != -EINVAL ? ret : -ENODATA);
+	return NULL;
+}
+
+static int init(struct mvod_capture *c, struct mvod_source *src, const char *uri)
+{
+	mvod_source_info(src, &c->info);
+	c->uri = strdup(uri);
+	if (!c->uri)
+		return -ENOMEM;
+	int ret = mvod_mailbox_init(&c->mb, (size_t)c->info.width * (size_t)c->info.height * 3);
+	if (ret)
+		return ret;
+	pthread_condattr_t attr;
+	pthread_condattr_init(&attr);
+	pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
+	pthread_cond_init(&c->wake, &attr);
+	pthread_condattr_destroy(&attr);
+	pthread_mutex_init(&c->lock, NULL);
+	c->last = -1;
+	ret = -pthread_create(&c->thread, NULL, run, c);
+	if (ret) {
+		pthread_cond_destroy(&c->wake);
+		pthread_mutex_destroy(&c->lock);
+		mvod_mailbox_fini(&c->mb);
+	}
+	return ret;
+}
+
+int mvod_capture_start(struct mvod_source *src, const char *uri, struct mvod_capture **out)
+{
+	struct mvod_capture *c = calloc(1, sizeof(*c));
+	if (!c)
+		return -ENOMEM;
+	c->src = src;
+	int ret = init(c, src, uri);
+	if (ret) {
+		free(c->uri);
+		free(c);
+		return ret;
+	}
+	*out = c;
+	return 0;
+}
+
+int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame *frame,
+		      int *epoch)
+{
+	struct mvod_letter *l;
+	int ret = mvod_mailbox_take(&c->mb, timeout_ms, &l);
+	if (ret)
+		return ret;
+	*frame = l->frame;
+	*epoch = l->epoch;
+	return 0;
+}
+
+bool mvod_capture_down(struct mvod_capture *c)
+{
+	return atomic_load(&c->down);
+}
+
+void mvod_capture_stop(struct mvod_capture *c)
+{
+	if (!c)
+		return;
+	pthread_mutex_lock(&c->lock);
+	c->stop = true;
+	pthread_cond_signal(&c->wake);
+	pthread_mutex_unlock(&c->lock);
+	pthread_join(c->thread, NULL);
+	pthread_cond_destroy(&c->wake);
+	pthread_mutex_destroy(&c->lock);
+	mvod_source_close(c->src);
+	mvod_mailbox_fini(&c->mb);
+	free(c->uri);
+	free(c);
+}
