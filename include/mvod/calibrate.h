@@ -60,7 +60,7 @@ struct mvod_calib_result {
 	double coverage;              /* fraction of image cells the used views' corners cover */
 	double tilt_span_deg;         /* largest angle between two used views' board normals */
 	enum mvod_calib_verdict verdict;
-	char advice[320];             /* what to do about the verdict, in words */
+	char advice[640];             /* what to do about the verdict, in words */
 };
 
 /*

@@ -18,6 +18,9 @@
 /* A ChArUco view needs this many corners by default: 4 fix a homography, 2 more vote down a bad one. */
 #define CHARUCO_MIN_CORNERS 6
 
+/* Off-board markers that reject a frame; a single one may be a misread code. */
+#define STRAY_MARKERS 2
+
 /* Every detected view; corners of all views in two growing pools. */
 struct store {
 	int n, cap;
@@ -33,7 +36,7 @@ struct store {
 /* What reading the source found besides views: the numbers behind a "no board" message. */
 struct scan {
 	int w, h;
-	int64_t frames, with_board, with_markers;
+	int64_t frames, with_board, with_markers, mislaid;
 	int max_markers, max_corners, max_stray, max_id, diagnosed;
 	char seen[128];            /* what a board-less frame showed instead, or "" */
 	struct mvod_image sample;  /* the frame whose board spans most of the image (report) */
@@ -149,6 +152,7 @@ static void note_missing(struct scan *sc, struct mvod_calib_det *det, const stru
 			 const struct mvod_calib_found *f)
 {
 	sc->with_markers += f->markers > 0;
+	sc->mislaid += f->mislaid;
 	sc->max_markers = f->markers > sc->max_markers ? f->markers : sc->max_markers;
 	sc->max_corners = f->n > sc->max_corners ? f->n : sc->max_corners;
 	sc->max_stray = f->stray > sc->max_stray ? f->stray : sc->max_stray;
@@ -168,7 +172,11 @@ static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
 	int ret = mvod_calib_detect(det, img, f);
 	if (ret)
 		return ret;
-	if (f->n < min_corners(o) || !spans_plane(&o->board, f)) {
+	/*
+	 * Markers of the dictionary with ids beyond the board mean a larger board than the spec
+	 * says: its corners would be placed by the wrong layout.
+	 */
+	if (f->n < min_corners(o) || !spans_plane(&o->board, f) || f->stray >= STRAY_MARKERS) {
 		note_missing(sc, det, img, f);
 		return 0;
 	}
@@ -235,6 +243,11 @@ static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int 
 				 "found %s markers with ids up to %d but a %dx%d board has %d (ids 0-%d): "
 				 "check the board size in --board %s", b->dict_name, sc->max_id, b->cols,
 				 b->rows, on_board, on_board - 1, spec);
+	if (sc->mislaid > 0)
+		return mvod_errf(err, errlen, -ENODATA,
+				 "found %s markers in %lld frames, but not arranged as on a %dx%d board "
+				 "(COLSxROWS counts squares across, then down): check --board %s",
+				 b->dict_name, (long long)sc->mislaid, b->cols, b->rows, spec);
 	if (b->kind == MVOD_BOARD_CHARUCO && sc->with_markers > 0)
 		return mvod_errf(err, errlen, -ENODATA,
 				 "found up to %d board markers in %lld frames but at most %d ChArUco "

@@ -145,6 +145,37 @@ void find_markers(mvod_calib_det &d, const cv::Mat &grey, std::vector<std::vecto
 	f.markers = (int)ids.size();
 }
 
+/*
+ * Whether corners sit where one homography of the board layout puts them. A board whose
+ * COLSxROWS differs from the spec (7x5 for 5x7) still yields markers and corners, but placed
+ * by the wrong layout, a square or more off: calibrating on them gives nonsense. Half a square
+ * of median residual leaves room for strong lens distortion.
+ */
+bool fits_layout(const mvod_board &b, const std::vector<cv::Point2f> &pts, const std::vector<int> &ids)
+{
+	if (pts.size() < 5)
+		return true;
+	std::vector<cv::Point2f> board;
+	for (int id : ids) {
+		double p[3];
+		mvod_board_corner(&b, id, p);
+		board.emplace_back((float)p[0], (float)p[1]);
+	}
+	cv::Mat H = cv::findHomography(board, pts, 0);
+	if (H.empty())
+		return false;
+	std::vector<cv::Point2f> proj, hull_img, hull_board;
+	cv::perspectiveTransform(board, proj, H);
+	std::vector<double> res;
+	for (size_t i = 0; i < pts.size(); i++)
+		res.push_back(cv::norm(proj[i] - pts[i]));
+	std::nth_element(res.begin(), res.begin() + (long)res.size() / 2, res.end());
+	cv::convexHull(pts, hull_img);
+	cv::convexHull(board, hull_board);
+	double px_per_m = std::sqrt(cv::contourArea(hull_img) / std::max(cv::contourArea(hull_board), 1e-12));
+	return res[res.size() / 2] < 0.5 * b.square_m * px_per_m;
+}
+
 void detect_charuco(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
 {
 	std::vector<std::vector<cv::Point2f>> corners;
@@ -155,7 +186,9 @@ void detect_charuco(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
 	std::vector<cv::Point2f> pts;
 	std::vector<int> pt_ids;
 	cv::aruco::interpolateCornersCharuco(corners, ids, grey, d.charuco, pts, pt_ids);
-	store_corners(pts, &pt_ids, f);
+	f.mislaid = !fits_layout(d.board, pts, pt_ids);
+	if (!f.mislaid)
+		store_corners(pts, &pt_ids, f);
 }
 
 /* "a chessboard with CxR inner corners" when one of any size is in view. */
@@ -181,7 +214,8 @@ bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, char *w
 		cv::aruco::detectMarkers(grey, cv::aruco::getPredefinedDictionary(k), corners, ids, params);
 		/* One or two hits can be chance codes in texture; a board shows many. */
 		if (ids.size() >= 4) {
-			std::snprintf(what, len, "%zu markers of %s", ids.size(), dict_names[k]);
+			std::snprintf(what, len, "%zu markers of %s%s", ids.size(), dict_names[k],
+				      k < N_SIZED_DICTS ? " (or a larger dictionary of its family)" : "");
 			return true;
 		}
 	}
@@ -220,6 +254,7 @@ extern "C" int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_ima
 {
 	f->n = f->markers = f->stray = 0;
 	f->max_id = -1;
+	f->mislaid = false;
 	return mvod_guarded([&] {
 		cv::Mat grey = grey_of(*img);
 		if (d->board.kind == MVOD_BOARD_CHARUCO)

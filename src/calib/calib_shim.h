@@ -28,6 +28,7 @@ struct mvod_calib_found {
 	int markers;   /* charuco: markers of this board found */
 	int stray;     /* charuco: markers of the dictionary whose ids are not on this board */
 	int max_id;    /* charuco: largest marker id seen; -1 = none */
+	bool mislaid;  /* charuco: corners do not lie on one plane as the layout says (f->n = 0) */
 };
 
 /* Finds the board in img (grey or BGR). No board is not an error: f->n = 0. */
