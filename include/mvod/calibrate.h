@@ -49,6 +49,7 @@ struct mvod_calib_result {
 	double rms_px;                /* over the views used */
 	int64_t frames_read;
 	int64_t frames_with_board;    /* frames with at least min_corners corners */
+	int64_t frames_repeated;      /* not examined: the same picture as the frame before */
 	int views_selected;           /* picked for calibration */
 	int views_used;               /* after dropping outliers */
 	double outlier_px;            /* per-view RMS above which a view was dropped */
@@ -59,6 +60,7 @@ struct mvod_calib_result {
 	double std_dist[MVOD_MAX_DIST];
 	double coverage;              /* fraction of image cells the used views' corners cover */
 	double tilt_span_deg;         /* largest angle between two used views' board normals */
+	double read_s, solve_s;       /* wall time reading and detecting, selecting and calibrating */
 	enum mvod_calib_verdict verdict;
 	char advice[640];             /* what to do about the verdict, in words */
 };

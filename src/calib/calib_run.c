@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "calib/calib_shim.h"
 #include "mvod/capture.h"
@@ -36,12 +37,19 @@ struct store {
 /* What reading the source found besides views: the numbers behind a "no board" message. */
 struct scan {
 	int w, h;
-	int64_t frames, with_board, with_markers, mislaid;
+	int64_t frames, with_board, with_markers, mislaid, repeats;
 	int max_markers, max_corners, max_stray, max_id, diagnosed;
 	char seen[128];            /* what a board-less frame showed instead, or "" */
 	struct mvod_image sample;  /* the frame whose board spans most of the image (report) */
 	float sample_extent;
 };
+
+static double now_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 static int grow(void **p, size_t *cap, size_t need, size_t elem)
 {
@@ -170,8 +178,10 @@ static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
 		    struct scan *sc)
 {
 	int ret = mvod_calib_detect(det, img, f);
-	if (ret)
+	if (ret || f->repeat) {
+		sc->repeats += f->repeat;
 		return ret;
+	}
 	/*
 	 * Markers of the dictionary with ids beyond the board mean a larger board than the spec
 	 * says: its corners would be placed by the wrong layout.
@@ -414,9 +424,13 @@ int mvod_calibrate(const struct mvod_calib_opts *o, struct mvod_calib_result *re
 	struct store s = {0};
 	struct scan sc = {.max_id = -1};
 	struct fitting ft = {0};
+	double t0 = now_s();
 	int ret = scan_source(o, &s, &sc, err, errlen);
+	double t1 = now_s();
+	res->read_s = t1 - t0;
 	res->frames_read = sc.frames;
 	res->frames_with_board = sc.with_board;
+	res->frames_repeated = sc.repeats;
 	if (ret)
 		goto out;
 	size_t m = (size_t)o->max_views;
@@ -433,6 +447,7 @@ int mvod_calibrate(const struct mvod_calib_opts *o, struct mvod_calib_result *re
 	if (ret)
 		goto out;
 	finish(&ft, &sc, res);
+	res->solve_s = now_s() - t1;
 	if (o->report)
 		ret = write_report(o, &ft, &sc, res, err, errlen);
 out:

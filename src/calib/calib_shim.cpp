@@ -27,6 +27,13 @@ const int DETECT_MAX_SIDE = 1280;
 /* Dictionaries in groups of four share their markers (DICT_6X6_50 is DICT_6X6_250's first 50). */
 const int DICT_FAMILY_SIZE = 4, N_SIZED_DICTS = 16, N_DICTS = 21;
 
+/*
+ * Each Levenberg-Marquardt step of OpenCV's calibration costs a dense solve cubic in 6 x views
+ * parameters (0.5 s at 85 views here); OpenCV's default runs all 30 steps unless the update is
+ * below DBL_EPSILON. A relative update of 1e-8 moves fx by under 1e-5 px.
+ */
+const cv::TermCriteria SOLVER_STOP(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 1e-8);
+
 const char *const dict_names[N_DICTS] = {
 	"DICT_4X4_50", "DICT_4X4_100", "DICT_4X4_250", "DICT_4X4_1000", "DICT_5X5_50",
 	"DICT_5X5_100", "DICT_5X5_250", "DICT_5X5_1000", "DICT_6X6_50", "DICT_6X6_100",
@@ -70,9 +77,27 @@ struct mvod_calib_det {
 	cv::Ptr<cv::aruco::CharucoBoard> charuco;
 	cv::Ptr<cv::aruco::DetectorParameters> params;
 	cv::Mat small;
+	cv::Mat thumb; /* of the last examined frame */
 };
 
 namespace {
+
+/*
+ * A 40 x 30 thumbnail averages each cell over 16 x 16 px or more, leaving sensor noise well
+ * under a grey level; a board that moves by 1 % of the image changes it by several.
+ */
+const cv::Size THUMB(40, 30);
+const double REPEAT_GREY_LEVELS = 1.0;
+
+bool is_repeat(mvod_calib_det &d, const cv::Mat &grey)
+{
+	cv::Mat t;
+	cv::resize(grey, t, THUMB, 0, 0, cv::INTER_AREA);
+	if (!d.thumb.empty() && cv::norm(t, d.thumb, cv::NORM_L1) / THUMB.area() < REPEAT_GREY_LEVELS)
+		return true;
+	d.thumb = t;
+	return false;
+}
 
 /* The grey image and a copy no larger than DETECT_MAX_SIDE; returns the copy's scale. */
 double detection_image(mvod_calib_det &d, const cv::Mat &grey)
@@ -257,6 +282,9 @@ extern "C" int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_ima
 	f->mislaid = false;
 	return mvod_guarded([&] {
 		cv::Mat grey = grey_of(*img);
+		f->repeat = is_repeat(*d, grey);
+		if (f->repeat)
+			return 0;
 		if (d->board.kind == MVOD_BOARD_CHARUCO)
 			detect_charuco(*d, grey, *f);
 		else
@@ -327,7 +355,7 @@ void fit_pinhole(const Views &v, cv::Size size, bool rational, mvod_calib_fit &f
 	std::vector<cv::Mat> rvecs, tvecs;
 	int flags = rational ? cv::CALIB_RATIONAL_MODEL : 0;
 	fit.rms_px = cv::calibrateCamera(v.obj, v.img, size, K, D, rvecs, tvecs, std_in, std_ex,
-					 per_view, flags);
+					 per_view, flags, SOLVER_STOP);
 	store_camera(K, D, rational ? 8 : 5, fit.cam);
 	store_poses(rvecs, tvecs, fit.view_pose);
 	for (size_t i = 0; i < v.obj.size(); i++)

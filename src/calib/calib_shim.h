@@ -29,9 +29,14 @@ struct mvod_calib_found {
 	int stray;     /* charuco: markers of the dictionary whose ids are not on this board */
 	int max_id;    /* charuco: largest marker id seen; -1 = none */
 	bool mislaid;  /* charuco: corners do not lie on one plane as the layout says (f->n = 0) */
+	bool repeat;   /* the frame is the last examined one again (a still camera): not examined */
 };
 
-/* Finds the board in img (grey or BGR). No board is not an error: f->n = 0. */
+/*
+ * Finds the board in img (grey or BGR). No board is not an error: f->n = 0. A frame that
+ * differs from the last examined one by less than sensor noise is not examined (f->repeat):
+ * its board would be a duplicate view that selection drops anyway.
+ */
 int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_image *img,
 		      struct mvod_calib_found *f);
 /*

@@ -153,12 +153,16 @@ static void print_params(const struct mvod_calib_result *r)
 
 static void print_result(const struct cli *c, const struct mvod_calib_result *r)
 {
-	printf("%s: %lld frames read, %lld with the board, %d views selected, %d used",
-	       cli_prog, (long long)r->frames_read, (long long)r->frames_with_board,
+	printf("%s: %lld frames read", cli_prog, (long long)r->frames_read);
+	if (r->frames_repeated)
+		printf(" (%lld skipped: a still picture)", (long long)r->frames_repeated);
+	printf(", %lld with the board, %d views selected, %d used", (long long)r->frames_with_board,
 	       r->views_selected, r->views_used);
 	if (r->views_used < r->views_selected)
 		printf(" (%d above %.3f px dropped)", r->views_selected - r->views_used, r->outlier_px);
-	printf("\n%s: RMS reprojection error %.3f px, model %s%s\n", cli_prog, r->rms_px,
+	printf("\n%s: %.1f s reading and detecting, %.1f s selecting and calibrating\n", cli_prog,
+	       r->read_s, r->solve_s);
+	printf("%s: RMS reprojection error %.3f px, model %s%s\n", cli_prog, r->rms_px,
 	       mvod_cam_model_name(r->cam.model),
 	       r->has_std ? " (+- one standard deviation)" : "");
 	print_params(r);

@@ -44,8 +44,9 @@ static void reference_K(const char *yml, double K[4])
 	K[3] = m[5];
 }
 
-/* Calibrates from images:DIR and returns the camera mvod wrote. */
-static void calibrate(const char *dir, const char *board, struct mvod_camera *cam)
+/* Calibrates from images:DIR and returns the camera mvod wrote and what it printed. */
+static void calibrate(const char *dir, const char *board, struct mvod_camera *cam,
+		      struct run_result *r)
 {
 	char src[600], out[600], report[600], err[256];
 	snprintf(src, sizeof(src), "images:%s", dir);
@@ -53,11 +54,10 @@ static void calibrate(const char *dir, const char *board, struct mvod_camera *ca
 	snprintf(report, sizeof(report), "%s/calib.png", harness_tmpdir());
 	char *argv[] = {(char *)harness_bin("MVOD"), "calibrate", "--source", src, "--board",
 			(char *)board, "--out", out, "--report", report, NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(argv, &r), 0);
-	if (!r.exited || r.status)
-		fail_msg("mvod calibrate failed (%d): %s", r.status, r.err);
-	print_message("%s", r.out);
+	assert_int_equal(harness_run(argv, r), 0);
+	if (!r->exited || r->status)
+		fail_msg("mvod calibrate failed (%d): %s", r->status, r->err);
+	print_message("%s", r->out);
 	if (mvod_calib_load(out, cam, err, sizeof(err)))
 		fail_msg("%s", err);
 	struct stat st;
@@ -93,7 +93,8 @@ static void test_charuco(void **state)
 	double ref[4], got[4];
 	reference_K(yml, ref);
 	struct mvod_camera cam;
-	calibrate(dir, "charuco:5x7:0.04:0.02:DICT_6X6_250", &cam);
+	static struct run_result r;
+	calibrate(dir, "charuco:5x7:0.04:0.02:DICT_6X6_250", &cam, &r);
 	got[0] = cam.fx, got[1] = cam.fy, got[2] = cam.cx, got[3] = cam.cy;
 	expect_near("opencv-charuco", got, ref, 0.02);
 	assert_int_equal(cam.width, 640);
@@ -122,13 +123,22 @@ static void test_chessboard(void **state)
 		if (access(from, F_OK) == 0)
 			assert_int_equal(symlink(from, to), 0);
 	}
+	/* A camera held still: the same picture twice more, examined once. */
+	char from[600], to[600];
+	snprintf(from, sizeof(from), "%s/left01.jpg", dir);
+	for (int i = 0; i < 2; i++) {
+		snprintf(to, sizeof(to), "%s/left01-still%d.jpg", dir, i);
+		assert_int_equal(symlink(from, to), 0);
+	}
 	snprintf(yml, sizeof(yml), "%s/opencv-chessboard/params/left_intrinsics.yml", data);
 	double ref[4], got[4];
 	reference_K(yml, ref);
 	struct mvod_camera cam;
-	calibrate(dir, "chessboard:9x6:0.025", &cam);
+	static struct run_result r;
+	calibrate(dir, "chessboard:9x6:0.025", &cam, &r);
 	got[0] = cam.fx, got[1] = cam.fy, got[2] = cam.cx, got[3] = cam.cy;
 	expect_near("opencv-chessboard left", got, ref, 0.01);
+	assert_non_null(strstr(r.out, "15 frames read (2 skipped: a still picture), 13 with the board"));
 }
 
 int main(void)
