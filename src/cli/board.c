@@ -100,7 +100,7 @@ static void print_advice(const struct cli *c, const struct mvod_image *img, int 
 	printf(" at 100 %% (\"actual size\", no scaling, not \"fit to page\"), and glue it flat on "
 	       "something rigid\n");
 	const struct mvod_board *b = &c->board;
-	printf("%s: measure a square with a ruler (it should be %.1f mm) and give mvod calibrate the "
+	printf("%s: measure a square with a ruler (it should be %.2f mm) and give mvod calibrate the "
 	       "measured size in metres:\n  --board ", cli_prog, square_mm);
 	if (b->kind == MVOD_BOARD_CHARUCO)
 		printf("charuco:%dx%d:SQUARE_M:MARKER_M:%s (a marker should be %.1f mm)\n", b->cols,

@@ -65,15 +65,28 @@ static void calibrate(const char *dir, const char *board, struct mvod_camera *ca
 	assert_true(st.st_size > 10000);
 }
 
-static void expect_near(const char *what, const double got[4], const double want[4], double frac)
+/*
+ * Calibrates images:DIR and compares fx and fy with the reference YAML (relative to the data
+ * folder) within frac of it. r receives what mvod printed.
+ */
+static void check_set(const char *name, const char *dir, const char *yml_rel, const char *board,
+		      double frac, struct run_result *r)
 {
-	static const char *const names[] = {"fx", "fy", "cx", "cy"};
+	char yml[600];
+	snprintf(yml, sizeof(yml), "%s/%s", getenv("MVOD_DATA"), yml_rel);
+	double want[4];
+	reference_K(yml, want);
+	struct mvod_camera cam;
+	calibrate(dir, board, &cam, r);
+	const double got[4] = {cam.fx, cam.fy, cam.cx, cam.cy};
+	print_message("%s: fx %.2f fy %.2f cx %.2f cy %.2f; reference %.2f %.2f %.2f %.2f\n", name,
+		      got[0], got[1], got[2], got[3], want[0], want[1], want[2], want[3]);
 	for (int i = 0; i < 2; i++)
 		if (fabs(got[i] - want[i]) > frac * want[i])
-			fail_msg("%s: %s %.2f, reference %.2f (bound %.1f %%)", what, names[i], got[i],
-				 want[i], 100 * frac);
-	print_message("%s: fx %.2f fy %.2f cx %.2f cy %.2f; reference %.2f %.2f %.2f %.2f\n", what,
-		      got[0], got[1], got[2], got[3], want[0], want[1], want[2], want[3]);
+			fail_msg("%s: %s %.2f, reference %.2f (bound %.1f %%)", name, i ? "fy" : "fx",
+				 got[i], want[i], 100 * frac);
+	assert_int_equal(cam.width, 640);
+	assert_int_equal(cam.n_dist, 5);
 }
 
 /*
@@ -86,19 +99,11 @@ static void expect_near(const char *what, const double got[4], const double want
 static void test_charuco(void **state)
 {
 	(void)state;
-	const char *data = getenv("MVOD_DATA");
-	char dir[512], yml[512];
-	snprintf(dir, sizeof(dir), "%s/opencv-charuco/calibration_images", data);
-	snprintf(yml, sizeof(yml), "%s/opencv-charuco/params/tutorial_camera_charuco.yml", data);
-	double ref[4], got[4];
-	reference_K(yml, ref);
-	struct mvod_camera cam;
+	char dir[512];
+	snprintf(dir, sizeof(dir), "%s/opencv-charuco/calibration_images", getenv("MVOD_DATA"));
 	static struct run_result r;
-	calibrate(dir, "charuco:5x7:0.04:0.02:DICT_6X6_250", &cam, &r);
-	got[0] = cam.fx, got[1] = cam.fy, got[2] = cam.cx, got[3] = cam.cy;
-	expect_near("opencv-charuco", got, ref, 0.02);
-	assert_int_equal(cam.width, 640);
-	assert_int_equal(cam.n_dist, 5);
+	check_set("opencv-charuco", dir, "opencv-charuco/params/tutorial_camera_charuco.yml",
+		  "charuco:5x7:0.04:0.02:DICT_6X6_250", 0.02, &r);
 }
 
 /*
@@ -112,7 +117,7 @@ static void test_chessboard(void **state)
 {
 	(void)state;
 	const char *data = getenv("MVOD_DATA");
-	char dir[512], yml[512];
+	char dir[512];
 	snprintf(dir, sizeof(dir), "%s/left", harness_tmpdir());
 	assert_int_equal(mkdir(dir, 0755), 0);
 	/* images: reads a whole folder; the set mixes left and right cameras. */
@@ -130,14 +135,9 @@ static void test_chessboard(void **state)
 		snprintf(to, sizeof(to), "%s/left01-still%d.jpg", dir, i);
 		assert_int_equal(symlink(from, to), 0);
 	}
-	snprintf(yml, sizeof(yml), "%s/opencv-chessboard/params/left_intrinsics.yml", data);
-	double ref[4], got[4];
-	reference_K(yml, ref);
-	struct mvod_camera cam;
 	static struct run_result r;
-	calibrate(dir, "chessboard:9x6:0.025", &cam, &r);
-	got[0] = cam.fx, got[1] = cam.fy, got[2] = cam.cx, got[3] = cam.cy;
-	expect_near("opencv-chessboard left", got, ref, 0.01);
+	check_set("opencv-chessboard left", dir, "opencv-chessboard/params/left_intrinsics.yml",
+		  "chessboard:9x6:0.025", 0.01, &r);
 	assert_non_null(strstr(r.out, "15 frames read (2 skipped: a still picture), 13 with the board"));
 }
 

@@ -114,7 +114,8 @@ static void test_board_says_how_to_print(void **state)
 	assert_non_null(strstr(r.out, "A4 (portrait)"));
 	assert_non_null(strstr(r.out, "100 %"));
 	assert_non_null(strstr(r.out, "measure a square"));
-	assert_non_null(strstr(r.out, "25.0 mm"));
+	/* 0.025 m at 300 dpi = 295.3 px, drawn 295 px = 24.98 mm. */
+	assert_non_null(strstr(r.out, "it should be 24.98 mm"));
 }
 
 /* A board's own image, undistorted and frontal, is found: one view, too few to calibrate. */
