@@ -143,7 +143,8 @@ static float corner_extent(const struct mvod_calib_obs *v, int w, int h, float *
 static int keep_sample(struct scan *sc, const struct mvod_image *img)
 {
 	int ch = img->fmt == MVOD_PIX_BGR ? 3 : 1;
-	if (!sc->sample.data || sc->sample.fmt != img->fmt) {
+	if (!sc->sample.data || sc->sample.fmt != img->fmt || sc->sample.w != img->w ||
+	    sc->sample.h != img->h) {
 		free(sc->sample.data);
 		sc->sample = (struct mvod_image){img->w, img->h, img->w * ch, img->fmt,
 						 malloc((size_t)img->w * (size_t)img->h * (size_t)ch)};
@@ -265,8 +266,9 @@ static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int 
 				 "%s, or bring the board closer", sc->max_markers,
 				 (long long)sc->with_markers, sc->max_corners, min_corners(o), spec);
 	if (sc->seen[0])
-		return mvod_errf(err, errlen, -ENODATA, "no %s board in %lld frames, but found %s: "
-				 "check --board %s", b->kind == MVOD_BOARD_CHARUCO ? b->dict_name : "chessboard",
+		return mvod_errf(err, errlen, -ENODATA, "no %dx%d %s in %lld frames, but found %s: "
+				 "check --board %s", b->cols, b->rows,
+				 b->kind == MVOD_BOARD_CHARUCO ? "ChArUco board" : "chessboard",
 				 (long long)sc->frames, sc->seen, spec);
 	return mvod_errf(err, errlen, -ENODATA,
 			 "no board found in %lld frames of %s: check --board %s (%s), the lighting "

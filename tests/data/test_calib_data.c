@@ -141,6 +141,37 @@ static void test_chessboard(void **state)
 	assert_non_null(strstr(r.out, "15 frames read (2 skipped: a still picture), 13 with the board"));
 }
 
+/* A spec that does not match the board fails, saying what was found instead. */
+static void expect_mismatch(const char *dir, const char *board, const char *needle)
+{
+	char src[600], out[600];
+	snprintf(src, sizeof(src), "images:%s/%s", getenv("MVOD_DATA"), dir);
+	snprintf(out, sizeof(out), "%s/mismatch.json", harness_tmpdir());
+	char *argv[] = {(char *)harness_bin("MVOD"), "calibrate", "--source", src, "--board",
+			(char *)board, "--out", out, NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status != 1 || !strstr(r.err, needle))
+		fail_msg("%s: expected exit 1 and '%s', got %d: %s", board, needle, r.status, r.err);
+	assert_int_not_equal(access(out, F_OK), 0);
+}
+
+static void test_wrong_specs(void **state)
+{
+	(void)state;
+	const char *charuco = "opencv-charuco/calibration_images";
+	/* The first 50 markers of DICT_6X6_250 are DICT_6X6_50's: the family is what can be told. */
+	expect_mismatch(charuco, "charuco:5x7:0.04:0.02:DICT_4X4_50",
+			"found 17 markers of DICT_6X6_50 (or a larger dictionary of its family)");
+	/* Ids 0-16 on a board with 8 markers. */
+	expect_mismatch(charuco, "charuco:4x4:0.04:0.02:DICT_6X6_250",
+			"ids up to 16 but a 4x4 board has 8");
+	/* The same 17 markers, laid out transposed. */
+	expect_mismatch(charuco, "charuco:7x5:0.04:0.02:DICT_6X6_250", "not arranged as on a 7x5 board");
+	expect_mismatch("opencv-chessboard/images", "chessboard:10x7:0.025",
+			"found a chessboard with 9x6 inner corners");
+}
+
 int main(void)
 {
 	const char *data = getenv("MVOD_DATA");
@@ -154,6 +185,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_charuco),
 		cmocka_unit_test(test_chessboard),
+		cmocka_unit_test(test_wrong_specs),
 	};
 	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }
