@@ -11,6 +11,8 @@ struct command {
 
 static const struct command commands[] = {
 	{"run", mvod_cmd_run},
+	{"calibrate", mvod_cmd_calibrate},
+	{"board", mvod_cmd_board},
 	{"calib-convert", mvod_cmd_convert},
 };
 

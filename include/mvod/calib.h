@@ -25,11 +25,27 @@ struct mvod_camera {
 	double dist[MVOD_MAX_DIST];  /* OpenCV order for the model */
 };
 
-/* What a calibration file records besides the intrinsics. */
+/*
+ * What a calibration file records besides the intrinsics. A zero-initialised meta records
+ * nothing but "rms_px": 0; every other field is written only when set. Pointers are borrowed.
+ */
 struct mvod_calib_meta {
 	double rms_px;     /* reprojection RMS in pixels; negative = unknown */
 	char board[128];   /* board spec, or "" */
 	char source[256];  /* what it was made from */
+	int n_views;                 /* views the calibration used; 0 = not recorded */
+	const double *view_rms_px;   /* n_views reprojection RMS values, pixels */
+	const double *view_pose;     /* n_views x 6: board-to-camera rvec (rad), tvec (metres) */
+	bool has_std;                /* std_K and std_dist hold standard deviations */
+	double std_K[4];             /* fx fy cx cy, pixels */
+	double std_dist[MVOD_MAX_DIST]; /* one per distortion coefficient of the camera */
+	/*
+	 * Camera focus setting when known (the live source fills it). A flag rather than NaN so
+	 * that a zero-initialised meta still means "unknown".
+	 */
+	bool has_focus;
+	double focus;
+	char verdict[32];            /* mvod calibrate's verdict ("good", ...), or "" */
 };
 
 /* "pinhole-radtan" / "fisheye-kb4" and back. */

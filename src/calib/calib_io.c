@@ -337,6 +337,46 @@ static cJSON *number_row(const double *v, int n)
 	return cJSON_CreateDoubleArray(v, n);
 }
 
+/* Per-view records: [{"rms_px": e, "rvec": [..], "tvec": [..]}, ...] in the order used. */
+static cJSON *views_to_json(const struct mvod_calib_meta *meta)
+{
+	cJSON *views = cJSON_CreateArray();
+	for (int i = 0; views && i < meta->n_views; i++) {
+		cJSON *v = cJSON_CreateObject();
+		cJSON_AddNumberToObject(v, "rms_px", meta->view_rms_px[i]);
+		if (meta->view_pose) {
+			cJSON_AddItemToObject(v, "rvec", number_row(meta->view_pose + 6 * i, 3));
+			cJSON_AddItemToObject(v, "tvec", number_row(meta->view_pose + 6 * i + 3, 3));
+		}
+		cJSON_AddItemToArray(views, v);
+	}
+	return views;
+}
+
+static void meta_to_json(cJSON *root, const struct mvod_camera *cam,
+			 const struct mvod_calib_meta *meta)
+{
+	if (meta->rms_px >= 0)
+		cJSON_AddNumberToObject(root, "rms_px", meta->rms_px);
+	if (meta->has_std) {
+		cJSON *sd = cJSON_AddObjectToObject(root, "std_dev");
+		cJSON_AddItemToObject(sd, "fx_fy_cx_cy", number_row(meta->std_K, 4));
+		cJSON_AddItemToObject(sd, "distortion", number_row(meta->std_dist, cam->n_dist));
+	}
+	if (meta->verdict[0])
+		cJSON_AddStringToObject(root, "verdict", meta->verdict);
+	if (meta->board[0])
+		cJSON_AddStringToObject(root, "board", meta->board);
+	if (meta->source[0])
+		cJSON_AddStringToObject(root, "source", meta->source);
+	if (meta->has_focus)
+		cJSON_AddNumberToObject(root, "focus", meta->focus);
+	if (meta->n_views > 0 && meta->view_rms_px) {
+		cJSON_AddNumberToObject(root, "views_used", meta->n_views);
+		cJSON_AddItemToObject(root, "views", views_to_json(meta));
+	}
+}
+
 static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_calib_meta *meta)
 {
 	cJSON *root = cJSON_CreateObject();
@@ -357,14 +397,8 @@ static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_cal
 	struct tm tm;
 	strftime(when, sizeof(when), "%Y-%m-%dT%H:%M:%SZ", gmtime_r(&now, &tm));
 	cJSON_AddStringToObject(root, "created", when);
-	if (meta) {
-		if (meta->rms_px >= 0)
-			cJSON_AddNumberToObject(root, "rms_px", meta->rms_px);
-		if (meta->board[0])
-			cJSON_AddStringToObject(root, "board", meta->board);
-		if (meta->source[0])
-			cJSON_AddStringToObject(root, "source", meta->source);
-	}
+	if (meta)
+		meta_to_json(root, cam, meta);
 	return root;
 }
 

@@ -5,7 +5,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include "mvod/board.h"
 #include "mvod/capture.h"
 #include "mvod/log.h"
 
@@ -93,6 +96,34 @@ bool cli_has_suffix(const char *s, const char *suffix)
 {
 	size_t n = strlen(s), m = strlen(suffix);
 	return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+int cli_parse_board(const char *s, struct mvod_board *b)
+{
+	char why[256];
+	if (mvod_board_parse(s, b, why, sizeof(why)) == 0)
+		return 0;
+	fprintf(stderr, "%s: --board %s: %s\n", cli_prog, s, why);
+	return -EINVAL;
+}
+
+int cli_check_writable(const char *opt, const char *path)
+{
+	struct stat st;
+	if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+		fprintf(stderr, "%s: --%s %s: is a directory; name a file\n", cli_prog, opt, path);
+		return -EISDIR;
+	}
+	const char *slash = strrchr(path, '/');
+	char dir[4096];
+	snprintf(dir, sizeof(dir), "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
+	if (access(dir, W_OK) != 0) {
+		int e = errno;
+		fprintf(stderr, "%s: --%s %s: cannot write in %s: %s\n", cli_prog, opt, path, dir,
+			strerror(e));
+		return -e;
+	}
+	return 0;
 }
 
 void cli_usage_input(FILE *out)

@@ -18,6 +18,14 @@ int cli_bad_value(const char *opt, const char *val, const char *want);
 int cli_parse_double(const char *opt, const char *s, double lo, double hi, double *out);
 int cli_parse_int(const char *opt, const char *s, long lo, long hi, long *out);
 bool cli_has_suffix(const char *s, const char *suffix);
+/* Parses a board spec, printing the parser's reason on failure (-EINVAL). */
+struct mvod_board;
+int cli_parse_board(const char *s, struct mvod_board *b);
+/*
+ * Whether --opt FILE can be written, before any work: its directory must be writable and FILE
+ * not a directory. Prints the reason and returns -errno when not.
+ */
+int cli_check_writable(const char *opt, const char *path);
 
 /* The subcommand's name for messages ("mvod", "mvod calibrate", ...). */
 extern const char *cli_prog;
@@ -68,6 +76,8 @@ int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_par
 
 /* Subcommands: argv[0] is the subcommand's name. Return the process exit status. */
 int mvod_cmd_run(int argc, char **argv);
+int mvod_cmd_calibrate(int argc, char **argv);
+int mvod_cmd_board(int argc, char **argv);
 int mvod_cmd_convert(int argc, char **argv);
 
 #endif

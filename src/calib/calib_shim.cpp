@@ -1,0 +1,447 @@
+/* Board detection and calibration on OpenCV 4.6 (the aruco module's pre-4.7 API). */
+#include "calib/calib_shim.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <opencv2/aruco/charuco.hpp>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "util/errbuf.h"
+#include "util/shim_guard.hpp"
+
+namespace {
+
+/*
+ * Detection runs on a copy scaled down to this many pixels on the long side: marker and
+ * chessboard finding cost grows with the area, and 1280 px still resolves a board that is
+ * usable for calibration. Corners are then refined in the full image.
+ */
+const int DETECT_MAX_SIDE = 1280;
+/* Dictionaries in groups of four share their markers (DICT_6X6_50 is DICT_6X6_250's first 50). */
+const int DICT_FAMILY_SIZE = 4, N_SIZED_DICTS = 16, N_DICTS = 21;
+
+/*
+ * Each Levenberg-Marquardt step of OpenCV's calibration costs a dense solve cubic in 6 x views
+ * parameters (0.5 s at 85 views here); OpenCV's default runs all 30 steps unless the update is
+ * below DBL_EPSILON. A relative update of 1e-8 moves fx by under 1e-5 px.
+ */
+const cv::TermCriteria SOLVER_STOP(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 1e-8);
+
+const char *const dict_names[N_DICTS] = {
+	"DICT_4X4_50", "DICT_4X4_100", "DICT_4X4_250", "DICT_4X4_1000", "DICT_5X5_50",
+	"DICT_5X5_100", "DICT_5X5_250", "DICT_5X5_1000", "DICT_6X6_50", "DICT_6X6_100",
+	"DICT_6X6_250", "DICT_6X6_1000", "DICT_7X7_50", "DICT_7X7_100", "DICT_7X7_250",
+	"DICT_7X7_1000", "DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5", "DICT_APRILTAG_25h9",
+	"DICT_APRILTAG_36h10", "DICT_APRILTAG_36h11",
+};
+
+int dict_family(int d)
+{
+	return d < N_SIZED_DICTS ? d / DICT_FAMILY_SIZE : d;
+}
+
+cv::Mat grey_of(const mvod_image &img)
+{
+	cv::Mat m(img.h, img.w, img.fmt == MVOD_PIX_BGR ? CV_8UC3 : CV_8UC1, img.data,
+		  (size_t)img.stride);
+	if (img.fmt == MVOD_PIX_GREY)
+		return m;
+	cv::Mat g;
+	cv::cvtColor(m, g, cv::COLOR_BGR2GRAY);
+	return g;
+}
+
+/* Sub-pixel window: under half the spacing of neighbouring corners, so it never spans two. */
+cv::Size subpix_window(const std::vector<cv::Point2f> &pts, int cols)
+{
+	double spacing = 1e9;
+	for (size_t i = 1; i < pts.size(); i++)
+		if (i % (size_t)cols != 0)
+			spacing = std::min(spacing, cv::norm(pts[i] - pts[i - 1]));
+	int half = std::clamp((int)(spacing * 0.4), 2, 11);
+	return {half, half};
+}
+
+} // namespace
+
+struct mvod_calib_det {
+	mvod_board board;
+	cv::Ptr<cv::aruco::Dictionary> dict;
+	cv::Ptr<cv::aruco::CharucoBoard> charuco;
+	cv::Ptr<cv::aruco::DetectorParameters> params;
+	cv::Mat small;
+	cv::Mat thumb; /* of the last examined frame */
+};
+
+namespace {
+
+/*
+ * A 40 x 30 thumbnail averages each cell over 16 x 16 px or more, leaving sensor noise well
+ * under a grey level; a board that moves by 1 % of the image changes it by several.
+ */
+const cv::Size THUMB(40, 30);
+const double REPEAT_GREY_LEVELS = 1.0;
+
+bool is_repeat(mvod_calib_det &d, const cv::Mat &grey)
+{
+	cv::Mat t;
+	cv::resize(grey, t, THUMB, 0, 0, cv::INTER_AREA);
+	if (!d.thumb.empty() && cv::norm(t, d.thumb, cv::NORM_L1) / THUMB.area() < REPEAT_GREY_LEVELS)
+		return true;
+	d.thumb = t;
+	return false;
+}
+
+/* The grey image and a copy no larger than DETECT_MAX_SIDE; returns the copy's scale. */
+double detection_image(mvod_calib_det &d, const cv::Mat &grey)
+{
+	double s = std::min(1.0, (double)DETECT_MAX_SIDE / std::max(grey.cols, grey.rows));
+	if (s < 1.0)
+		cv::resize(grey, d.small, cv::Size(), s, s, cv::INTER_AREA);
+	else
+		d.small = grey;
+	return s;
+}
+
+void store_corners(const std::vector<cv::Point2f> &pts, const std::vector<int> *ids,
+		   mvod_calib_found &f)
+{
+	f.n = (int)pts.size();
+	for (int i = 0; i < f.n; i++) {
+		f.ids[i] = ids ? (*ids)[i] : i;
+		f.xy[2 * i] = pts[i].x;
+		f.xy[2 * i + 1] = pts[i].y;
+	}
+}
+
+void detect_chessboard(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
+{
+	double s = detection_image(d, grey);
+	cv::Size pattern(d.board.cols, d.board.rows);
+	std::vector<cv::Point2f> pts;
+	bool found = cv::findChessboardCornersSB(d.small, pattern, pts, cv::CALIB_CB_NORMALIZE_IMAGE);
+	if (!found)
+		found = cv::findChessboardCorners(d.small, pattern, pts,
+						  cv::CALIB_CB_ADAPTIVE_THRESH |
+							  cv::CALIB_CB_NORMALIZE_IMAGE |
+							  cv::CALIB_CB_FAST_CHECK);
+	if (!found)
+		return;
+	for (auto &p : pts)
+		p *= 1.0 / s;
+	/* SB corners are already sub-pixel in the image they came from; refine the rest and upscaled ones. */
+	cv::cornerSubPix(grey, pts, subpix_window(pts, d.board.cols), cv::Size(-1, -1),
+			 cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 30, 0.01));
+	store_corners(pts, nullptr, f);
+}
+
+/* Markers of the board's dictionary, in full-image pixels; strays (ids off the board) counted. */
+void find_markers(mvod_calib_det &d, const cv::Mat &grey, std::vector<std::vector<cv::Point2f>> &corners,
+		  std::vector<int> &ids, mvod_calib_found &f)
+{
+	double s = detection_image(d, grey);
+	std::vector<std::vector<cv::Point2f>> all, rejected;
+	std::vector<int> all_ids;
+	cv::aruco::detectMarkers(d.small, d.dict, all, all_ids, d.params, rejected);
+	int on_board = (int)d.charuco->ids.size();
+	for (size_t i = 0; i < all_ids.size(); i++) {
+		f.max_id = std::max(f.max_id, all_ids[i]);
+		if (all_ids[i] >= on_board) {
+			f.stray++;
+			continue;
+		}
+		for (auto &p : all[i])
+			p *= 1.0 / s;
+		corners.push_back(all[i]);
+		ids.push_back(all_ids[i]);
+	}
+	for (auto &r : rejected)
+		for (auto &p : r)
+			p *= 1.0 / s;
+	if (!ids.empty())
+		cv::aruco::refineDetectedMarkers(grey, d.charuco, corners, ids, rejected);
+	f.markers = (int)ids.size();
+}
+
+/*
+ * Whether corners sit where one homography of the board layout puts them. A board whose
+ * COLSxROWS differs from the spec (7x5 for 5x7) still yields markers and corners, but placed
+ * by the wrong layout, a square or more off: calibrating on them gives nonsense. Half a square
+ * of median residual leaves room for strong lens distortion.
+ */
+bool fits_layout(const mvod_board &b, const std::vector<cv::Point2f> &pts, const std::vector<int> &ids)
+{
+	if (pts.size() < 5)
+		return true;
+	std::vector<cv::Point2f> board;
+	for (int id : ids) {
+		double p[3];
+		mvod_board_corner(&b, id, p);
+		board.emplace_back((float)p[0], (float)p[1]);
+	}
+	cv::Mat H = cv::findHomography(board, pts, 0);
+	if (H.empty())
+		return false;
+	std::vector<cv::Point2f> proj, hull_img, hull_board;
+	cv::perspectiveTransform(board, proj, H);
+	std::vector<double> res;
+	for (size_t i = 0; i < pts.size(); i++)
+		res.push_back(cv::norm(proj[i] - pts[i]));
+	std::nth_element(res.begin(), res.begin() + (long)res.size() / 2, res.end());
+	cv::convexHull(pts, hull_img);
+	cv::convexHull(board, hull_board);
+	double px_per_m = std::sqrt(cv::contourArea(hull_img) / std::max(cv::contourArea(hull_board), 1e-12));
+	return res[res.size() / 2] < 0.5 * b.square_m * px_per_m;
+}
+
+void detect_charuco(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
+{
+	std::vector<std::vector<cv::Point2f>> corners;
+	std::vector<int> ids;
+	find_markers(d, grey, corners, ids, f);
+	if (ids.empty())
+		return;
+	std::vector<cv::Point2f> pts;
+	std::vector<int> pt_ids;
+	cv::aruco::interpolateCornersCharuco(corners, ids, grey, d.charuco, pts, pt_ids);
+	f.mislaid = !fits_layout(d.board, pts, pt_ids);
+	if (!f.mislaid)
+		store_corners(pts, &pt_ids, f);
+}
+
+/* "a chessboard with CxR inner corners" when one of any size is in view. */
+bool find_any_chessboard(const cv::Mat &grey, char *what, size_t len)
+{
+	std::vector<cv::Point2f> pts;
+	cv::Mat meta;
+	if (!cv::findChessboardCornersSB(grey, cv::Size(3, 3), pts, cv::CALIB_CB_LARGER, meta) ||
+	    meta.empty())
+		return false;
+	std::snprintf(what, len, "a chessboard with %dx%d inner corners", meta.cols, meta.rows);
+	return true;
+}
+
+bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, char *what, size_t len)
+{
+	auto params = cv::aruco::DetectorParameters::create();
+	for (int k = 0; k < N_DICTS; k++) {
+		if (d.board.kind == MVOD_BOARD_CHARUCO && dict_family(k) == dict_family(d.board.dict))
+			continue;
+		std::vector<std::vector<cv::Point2f>> corners;
+		std::vector<int> ids;
+		cv::aruco::detectMarkers(grey, cv::aruco::getPredefinedDictionary(k), corners, ids, params);
+		/* One or two hits can be chance codes in texture; a board shows many. */
+		if (ids.size() >= 4) {
+			std::snprintf(what, len, "%zu markers of %s%s", ids.size(), dict_names[k],
+				      k < N_SIZED_DICTS ? " (or a larger dictionary of its family)" : "");
+			return true;
+		}
+	}
+	return false;
+}
+
+} // namespace
+
+extern "C" int mvod_calib_det_create(const struct mvod_board *b, struct mvod_calib_det **out)
+{
+	*out = nullptr;
+	return mvod_guarded([&] {
+		auto *d = new mvod_calib_det();
+		d->board = *b;
+		if (b->kind == MVOD_BOARD_CHARUCO) {
+			d->dict = cv::aruco::getPredefinedDictionary(b->dict);
+			d->charuco = cv::aruco::CharucoBoard::create(b->cols, b->rows, (float)b->square_m,
+								     (float)b->marker_m, d->dict);
+			d->params = cv::aruco::DetectorParameters::create();
+			d->params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_SUBPIX;
+			/* A board printed white-on-black (or shown on a screen inverted) is still a board. */
+			d->params->detectInvertedMarker = true;
+		}
+		*out = d;
+		return 0;
+	});
+}
+
+extern "C" void mvod_calib_det_destroy(struct mvod_calib_det *d)
+{
+	delete d;
+}
+
+extern "C" int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_image *img,
+				 struct mvod_calib_found *f)
+{
+	f->n = f->markers = f->stray = 0;
+	f->max_id = -1;
+	f->mislaid = false;
+	return mvod_guarded([&] {
+		cv::Mat grey = grey_of(*img);
+		f->repeat = is_repeat(*d, grey);
+		if (f->repeat)
+			return 0;
+		if (d->board.kind == MVOD_BOARD_CHARUCO)
+			detect_charuco(*d, grey, *f);
+		else
+			detect_chessboard(*d, grey, *f);
+		return 0;
+	});
+}
+
+extern "C" int mvod_calib_diagnose(struct mvod_calib_det *d, const struct mvod_image *img,
+				   char *what, size_t len)
+{
+	what[0] = '\0';
+	return mvod_guarded([&] {
+		cv::Mat grey = grey_of(*img);
+		detection_image(*d, grey);
+		if (!find_other_dictionary(*d, d->small, what, len))
+			find_any_chessboard(d->small, what, len);
+		return 0;
+	});
+}
+
+namespace {
+
+struct Views {
+	std::vector<std::vector<cv::Point3f>> obj;
+	std::vector<std::vector<cv::Point2f>> img;
+};
+
+Views to_views(const mvod_board &b, const mvod_calib_obs *v, int n)
+{
+	Views out;
+	out.obj.resize(n);
+	out.img.resize(n);
+	for (int i = 0; i < n; i++) {
+		for (int k = 0; k < v[i].n; k++) {
+			double p[3];
+			mvod_board_corner(&b, v[i].ids[k], p);
+			out.obj[i].emplace_back((float)p[0], (float)p[1], (float)p[2]);
+			out.img[i].emplace_back(v[i].xy[2 * k], v[i].xy[2 * k + 1]);
+		}
+	}
+	return out;
+}
+
+void store_camera(const cv::Mat &K, const cv::Mat &D, int n_dist, mvod_camera &cam)
+{
+	cam.fx = K.at<double>(0, 0);
+	cam.fy = K.at<double>(1, 1);
+	cam.cx = K.at<double>(0, 2);
+	cam.cy = K.at<double>(1, 2);
+	cam.n_dist = n_dist;
+	for (int i = 0; i < n_dist; i++)
+		cam.dist[i] = D.at<double>(i);
+}
+
+void store_poses(const std::vector<cv::Mat> &rvecs, const std::vector<cv::Mat> &tvecs, double *pose)
+{
+	for (size_t i = 0; i < rvecs.size(); i++)
+		for (int k = 0; k < 3; k++) {
+			pose[6 * i + k] = rvecs[i].at<double>(k);
+			pose[6 * i + 3 + k] = tvecs[i].at<double>(k);
+		}
+}
+
+void fit_pinhole(const Views &v, cv::Size size, bool rational, mvod_calib_fit &fit)
+{
+	cv::Mat K, D, std_in, std_ex, per_view;
+	std::vector<cv::Mat> rvecs, tvecs;
+	int flags = rational ? cv::CALIB_RATIONAL_MODEL : 0;
+	fit.rms_px = cv::calibrateCamera(v.obj, v.img, size, K, D, rvecs, tvecs, std_in, std_ex,
+					 per_view, flags, SOLVER_STOP);
+	store_camera(K, D, rational ? 8 : 5, fit.cam);
+	store_poses(rvecs, tvecs, fit.view_pose);
+	for (size_t i = 0; i < v.obj.size(); i++)
+		fit.view_rms_px[i] = per_view.at<double>((int)i);
+	/* stdDeviationsIntrinsics: fx fy cx cy, then the coefficients in OpenCV order. */
+	fit.has_std = true;
+	for (int i = 0; i < 4; i++)
+		fit.std_K[i] = std_in.at<double>(i);
+	for (int i = 0; i < fit.cam.n_dist; i++)
+		fit.std_dist[i] = std_in.at<double>(4 + i);
+}
+
+/* cv::fisheye::calibrate reports neither per-view errors nor deviations: errors are recomputed. */
+void fit_fisheye(const Views &v, cv::Size size, mvod_calib_fit &fit)
+{
+	cv::Matx33d K;
+	cv::Vec4d D;
+	std::vector<cv::Mat> rvecs, tvecs;
+	int flags = cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW;
+	cv::fisheye::calibrate(v.obj, v.img, size, K, D, rvecs, tvecs, flags,
+			       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-10));
+	store_camera(cv::Mat(K), cv::Mat(D), 4, fit.cam);
+	store_poses(rvecs, tvecs, fit.view_pose);
+	double sum = 0;
+	size_t total = 0;
+	for (size_t i = 0; i < v.obj.size(); i++) {
+		std::vector<cv::Point2f> proj;
+		cv::fisheye::projectPoints(v.obj[i], proj, rvecs[i], tvecs[i], K, D);
+		double e = 0;
+		for (size_t k = 0; k < proj.size(); k++) {
+			cv::Point2f r = proj[k] - v.img[i][k];
+			e += r.dot(r);
+		}
+		fit.view_rms_px[i] = std::sqrt(e / (double)proj.size());
+		sum += e;
+		total += proj.size();
+	}
+	fit.rms_px = std::sqrt(sum / (double)total);
+	fit.has_std = false;
+}
+
+} // namespace
+
+extern "C" int mvod_calib_solve(const struct mvod_board *b, const struct mvod_calib_obs *v, int n,
+			      int w, int h, enum mvod_cam_model model, bool rational,
+			      struct mvod_calib_fit *fit, char *err, size_t errlen)
+{
+	int ret = mvod_guarded([&] {
+		Views views = to_views(*b, v, n);
+		fit->cam.width = w;
+		fit->cam.height = h;
+		fit->cam.model = model;
+		if (model == MVOD_CAM_FISHEYE_KB4)
+			fit_fisheye(views, cv::Size(w, h), *fit);
+		else
+			fit_pinhole(views, cv::Size(w, h), rational, *fit);
+		return std::isfinite(fit->rms_px) && fit->cam.fx > 0 && fit->cam.fy > 0 ? 0 : -EDOM;
+	});
+	if (ret)
+		mvod_errf(err, errlen, ret,
+			  "the %s calibration did not converge on %d views (the views may be too alike, "
+			  "or the board spec may not match the board)",
+			  mvod_cam_model_name(model), n);
+	return ret;
+}
+
+extern "C" int mvod_calib_rough_tilts(const struct mvod_board *b, const struct mvod_calib_obs *v,
+				      int n, int w, int h, double *rvecs)
+{
+	return mvod_guarded([&] {
+		Views views = to_views(*b, v, n);
+		/* Homographies of a couple of hundred views pin down a rough K as well as all of them. */
+		Views sample;
+		int step = std::max(1, n / 200);
+		for (int i = 0; i < n; i += step) {
+			sample.obj.push_back(views.obj[i]);
+			sample.img.push_back(views.img[i]);
+		}
+		cv::Mat K = cv::initCameraMatrix2D(sample.obj, sample.img, cv::Size(w, h));
+		for (int i = 0; i < n; i++) {
+			cv::Vec3d r(0, 0, 0), t;
+			cv::solvePnP(views.obj[i], views.img[i], K, cv::noArray(), r, t, false,
+				     cv::SOLVEPNP_IPPE);
+			for (int k = 0; k < 3; k++)
+				rvecs[3 * i + k] = r[k];
+		}
+		return 0;
+	});
+}

@@ -1,0 +1,99 @@
+/* The OpenCV side of mvod calibrate: board detection, calibration, the report, PNG files. */
+#ifndef MVOD_CALIB_SHIM_H
+#define MVOD_CALIB_SHIM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "mvod/board.h"
+#include "mvod/calib.h"
+#include "mvod/image.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* A board detector: the dictionary, board layout and scratch images, made once per run. */
+struct mvod_calib_det;
+
+int mvod_calib_det_create(const struct mvod_board *b, struct mvod_calib_det **out);
+/* NULL is a no-op. */
+void mvod_calib_det_destroy(struct mvod_calib_det *d);
+
+/* What one frame shows; ids and xy are caller-owned, of mvod_board_corner_count capacity. */
+struct mvod_calib_found {
+	int n;         /* corners found (chessboard: all or none) */
+	int *ids;      /* corner indices, mvod_board_corner order */
+	float *xy;     /* 2n pixel coordinates */
+	int markers;   /* charuco: markers of this board found */
+	int stray;     /* charuco: markers of the dictionary whose ids are not on this board */
+	int max_id;    /* charuco: largest marker id seen; -1 = none */
+	bool mislaid;  /* charuco: corners do not lie on one plane as the layout says (f->n = 0) */
+	bool repeat;   /* the frame is the last examined one again (a still camera): not examined */
+};
+
+/*
+ * Finds the board in img (grey or BGR). No board is not an error: f->n = 0. A frame that
+ * differs from the last examined one by less than sensor noise is not examined (f->repeat):
+ * its board would be a duplicate view that selection drops anyway.
+ */
+int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_image *img,
+		      struct mvod_calib_found *f);
+/*
+ * For a frame where the board was not found: what the image shows instead, e.g. "markers of
+ * DICT_4X4_50" or "a chessboard with 7x5 inner corners", or "" when nothing. Slow (tries
+ * every dictionary): for a few frames only.
+ */
+int mvod_calib_diagnose(struct mvod_calib_det *d, const struct mvod_image *img, char *what,
+			size_t len);
+
+/* One view for calibration: n corners with their board indices and pixel positions. */
+struct mvod_calib_obs {
+	int n;
+	const int *ids;
+	const float *xy;
+};
+
+struct mvod_calib_fit {
+	struct mvod_camera cam;
+	double rms_px;
+	double *view_rms_px;   /* caller-owned, n entries */
+	double *view_pose;     /* caller-owned, 6n: rvec, tvec */
+	bool has_std;
+	double std_K[4];
+	double std_dist[MVOD_MAX_DIST];
+};
+
+/* Calibrates a w x h camera of the given model from n views. fit's arrays are caller-owned. */
+int mvod_calib_solve(const struct mvod_board *b, const struct mvod_calib_obs *v, int n, int w, int h,
+		   enum mvod_cam_model model, bool rational, struct mvod_calib_fit *fit, char *err,
+		   size_t errlen);
+
+/*
+ * Board orientation of each view (rvecs, 3n) under a rough pinhole camera estimated from the
+ * views themselves: good to a few degrees, enough to tell tilts apart before calibrating.
+ */
+int mvod_calib_rough_tilts(const struct mvod_board *b, const struct mvod_calib_obs *v, int n,
+			   int w, int h, double *rvecs);
+
+struct mvod_calib_report {
+	const struct mvod_camera *cam;
+	const struct mvod_calib_obs *views; /* the views used */
+	int n;
+	const double *view_rms_px;
+	double outlier_px;                  /* the drop threshold, drawn on the error chart */
+	double coverage;                    /* fraction of image cells covered */
+	const struct mvod_image *sample;    /* a frame with the board, or NULL */
+};
+
+/* One PNG: corner coverage, per-view error, a sample frame before and after undistortion. */
+int mvod_calib_report_write(const char *path, const struct mvod_calib_report *r);
+
+/* Writes img as PNG through temp+rename, with a pHYs chunk saying dpi when dpi > 0. */
+int mvod_png_write(const char *path, const struct mvod_image *img, double dpi);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

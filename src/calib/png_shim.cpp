@@ -1,0 +1,62 @@
+/* PNG files that say their print resolution, so a board printed at 100 % has its true size. */
+#include "calib/calib_shim.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <zlib.h>
+
+#include "util/atomic_file.h"
+#include "util/shim_guard.hpp"
+
+namespace {
+
+/* Signature (8 bytes) + IHDR (4 length + 4 type + 13 data + 4 CRC): pHYs must precede IDAT. */
+const size_t AFTER_IHDR = 8 + 4 + 4 + 13 + 4;
+
+void put_be32(std::vector<uchar> &v, uint32_t x)
+{
+	for (int s = 24; s >= 0; s -= 8)
+		v.push_back((uchar)(x >> s));
+}
+
+/* pHYs: pixels per metre in x and y, unit 1 = metre. */
+std::vector<uchar> phys_chunk(double dpi)
+{
+	uint32_t ppm = (uint32_t)std::lround(dpi / 0.0254);
+	std::vector<uchar> c;
+	put_be32(c, 9);
+	const uchar type[] = {'p', 'H', 'Y', 's'};
+	c.insert(c.end(), type, type + 4);
+	put_be32(c, ppm);
+	put_be32(c, ppm);
+	c.push_back(1);
+	uLong crc = crc32(0L, c.data() + 4, (uInt)(c.size() - 4));
+	put_be32(c, (uint32_t)crc);
+	return c;
+}
+
+} // namespace
+
+extern "C" int mvod_png_write(const char *path, const struct mvod_image *img, double dpi)
+{
+	if (!std::isfinite(dpi) || dpi < 0)
+		return -EINVAL;
+	return mvod_guarded([&] {
+		cv::Mat m(img->h, img->w, img->fmt == MVOD_PIX_BGR ? CV_8UC3 : CV_8UC1, img->data,
+			  (size_t)img->stride);
+		/* Encoded before any file exists, so an encoder error leaves nothing behind. */
+		std::vector<uchar> png;
+		if (!cv::imencode(".png", m, png) || png.size() < AFTER_IHDR)
+			return -EIO;
+		if (dpi > 0) {
+			std::vector<uchar> phys = phys_chunk(dpi);
+			png.insert(png.begin() + AFTER_IHDR, phys.begin(), phys.end());
+		}
+		return mvod_write_replace(path, png.data(), png.size());
+	});
+}
