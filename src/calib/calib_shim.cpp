@@ -422,6 +422,27 @@ void fit_pinhole(const Views &v, cv::Size size, bool rational, mvod_calib_fit &f
 		fit.std_dist[i] = std_in.at<double>(4 + i);
 }
 
+/*
+ * cv::fisheye::calibrate starts from f = max(w, h) / pi, an equidistant lens seeing 180 deg
+ * across the image; for a narrower lens (fx 500 on 640 px) its initial board poses degenerate
+ * and it fails (InitExtrinsics asserts). A pinhole fit with radial terms is close enough to any
+ * lens the pinhole model can still describe to start it from there; when even that fails, the
+ * lens is wide and OpenCV's own start suits it.
+ */
+bool pinhole_guess(const Views &v, cv::Size size, cv::Matx33d &K)
+{
+	try {
+		cv::Mat K0, D0;
+		std::vector<cv::Mat> r, t;
+		cv::calibrateCamera(v.obj, v.img, size, K0, D0, r, t,
+				    cv::CALIB_ZERO_TANGENT_DIST | cv::CALIB_FIX_K3, SOLVER_STOP);
+		K = cv::Matx33d(K0);
+		return K(0, 0) > 0 && K(1, 1) > 0 && std::isfinite(K(0, 0) + K(1, 1) + K(0, 2) + K(1, 2));
+	} catch (const cv::Exception &) {
+		return false;
+	}
+}
+
 /* cv::fisheye::calibrate reports neither per-view errors nor deviations: errors are recomputed. */
 void fit_fisheye(const Views &v, cv::Size size, mvod_calib_fit &fit)
 {
@@ -429,6 +450,8 @@ void fit_fisheye(const Views &v, cv::Size size, mvod_calib_fit &fit)
 	cv::Vec4d D;
 	std::vector<cv::Mat> rvecs, tvecs;
 	int flags = cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW;
+	if (pinhole_guess(v, size, K))
+		flags |= cv::fisheye::CALIB_USE_INTRINSIC_GUESS;
 	cv::fisheye::calibrate(v.obj, v.img, size, K, D, rvecs, tvecs, flags,
 			       cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-10));
 	store_camera(cv::Mat(K), cv::Mat(D), 4, fit.cam);
