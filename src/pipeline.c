@@ -102,9 +102,14 @@ static int open_camera(struct run *r)
 		    r->cam.width, r->cam.height, o->source, r->info.width, r->info.height);
 		return -EINVAL;
 	}
-	/* Recorded so that a calibration made at another focus can be told apart. */
-	if (!isnan(r->info.focus))
-		LOG(INFO, "%s: autofocus off, focus held at %g", o->source, r->info.focus);
+	if (isnan(r->info.focus))
+		return 0;
+	LOG(INFO, "%s: autofocus off, focus held at %g", o->source, r->info.focus);
+	/* A focus change moves the focal length: the calibration holds only at its own focus. */
+	if (r->cam.has_focus && r->cam.focus != r->info.focus)
+		LOG(WARN, "the calibration was made at focus %g but the camera is at %g: the "
+			  "intrinsics may be off; set the focus back (v4l2-ctl -c focus_absolute=%g) "
+			  "or calibrate again", r->cam.focus, r->info.focus, r->cam.focus);
 	return 0;
 }
 

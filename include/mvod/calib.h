@@ -23,6 +23,13 @@ struct mvod_camera {
 	enum mvod_cam_model model;
 	int n_dist;                  /* number of valid entries in dist (0 = none) */
 	double dist[MVOD_MAX_DIST];  /* OpenCV order for the model */
+	/*
+	 * The lens focus position (device units) the intrinsics were measured at, when the camera
+	 * reported one: a different focus changes the focal length. A flag rather than NaN so that
+	 * a zero-initialised camera still means "unknown".
+	 */
+	bool has_focus;
+	double focus;
 };
 
 /*
@@ -39,12 +46,6 @@ struct mvod_calib_meta {
 	bool has_std;                /* std_K and std_dist hold standard deviations */
 	double std_K[4];             /* fx fy cx cy, pixels */
 	double std_dist[MVOD_MAX_DIST]; /* one per distortion coefficient of the camera */
-	/*
-	 * Camera focus setting when known (the live source fills it). A flag rather than NaN so
-	 * that a zero-initialised meta still means "unknown".
-	 */
-	bool has_focus;
-	double focus;
 	char verdict[32];            /* mvod calibrate's verdict ("good", ...), or "" */
 };
 

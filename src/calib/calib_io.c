@@ -178,6 +178,16 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
 			   mvod_calib_dist_counts(c.model), mvod_cam_model_name(c.model));
 		goto out;
 	}
+	const cJSON *focus = cJSON_GetObjectItemCaseSensitive(root, "focus");
+	if (focus && !cJSON_IsNull(focus)) {
+		if (!cJSON_IsNumber(focus) || !isfinite(focus->valuedouble)) {
+			ret = mvod_errf(err, errlen, -EINVAL, "\"focus\" must be a number (the lens "
+				   "focus position the calibration was made at)");
+			goto out;
+		}
+		c.has_focus = true;
+		c.focus = focus->valuedouble;
+	}
 	*cam = c;
 out:
 	cJSON_Delete(root);
@@ -369,8 +379,6 @@ static void meta_to_json(cJSON *root, const struct mvod_camera *cam,
 		cJSON_AddStringToObject(root, "board", meta->board);
 	if (meta->source[0])
 		cJSON_AddStringToObject(root, "source", meta->source);
-	if (meta->has_focus)
-		cJSON_AddNumberToObject(root, "focus", meta->focus);
 	if (meta->n_views > 0 && meta->view_rms_px) {
 		cJSON_AddNumberToObject(root, "views_used", meta->n_views);
 		cJSON_AddItemToObject(root, "views", views_to_json(meta));
@@ -392,6 +400,8 @@ static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_cal
 		cJSON_AddItemToArray(k, number_row(K[r], 3));
 	cJSON_AddItemToObject(root, "K", k);
 	cJSON_AddItemToObject(root, "distortion", number_row(cam->dist, cam->n_dist));
+	if (cam->has_focus)
+		cJSON_AddNumberToObject(root, "focus", cam->focus);
 	char when[32];
 	time_t now = time(NULL);
 	struct tm tm;

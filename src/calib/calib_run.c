@@ -37,6 +37,7 @@ struct store {
 /* What reading the source found besides views: the numbers behind a "no board" message. */
 struct scan {
 	int w, h;
+	double focus;              /* the source's locked lens focus; NaN when it reports none */
 	int64_t frames, with_board, with_markers, mislaid, repeats;
 	int max_markers, max_corners, max_stray, max_id, diagnosed;
 	char seen[128];            /* what a board-less frame showed instead, or "" */
@@ -289,6 +290,7 @@ static int scan_source(const struct mvod_calib_opts *o, struct store *s, struct 
 	mvod_source_info(src, &info);
 	sc->w = info.width;
 	sc->h = info.height;
+	sc->focus = info.focus;
 	ret = mvod_calib_det_create(&o->board, &det);
 	if (ret)
 		mvod_errf(err, errlen, ret, "cannot set up the board detector: %s", strerror(-ret));
@@ -361,6 +363,9 @@ static int calibrate_views(const struct mvod_calib_opts *o, const struct scan *s
 static void finish(const struct fitting *ft, const struct scan *sc, struct mvod_calib_result *res)
 {
 	res->cam = ft->fit.cam;
+	/* A calibration holds at the focus it was made at; mvod run compares the two. */
+	res->cam.has_focus = !isnan(sc->focus);
+	res->cam.focus = res->cam.has_focus ? sc->focus : 0;
 	res->rms_px = ft->fit.rms_px;
 	res->views_used = ft->n;
 	res->has_std = ft->fit.has_std;

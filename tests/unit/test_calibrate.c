@@ -155,12 +155,12 @@ static void file_records_the_calibration(void **state)
 {
 	(void)state;
 	struct mvod_camera c = {.width = 640, .height = 480, .fx = 500, .fy = 501, .cx = 320,
-				.cy = 240, .n_dist = 5, .dist = {-0.1, 0.01, 0, 0, 0}};
+				.cy = 240, .n_dist = 5, .dist = {-0.1, 0.01, 0, 0, 0},
+				.has_focus = true, .focus = 120};
 	const double rms[2] = {0.11, 0.13}, pose[12] = {0.1, 0.2, 0.3, 0.01, 0.02, 0.5};
 	struct mvod_calib_meta meta = {.rms_px = 0.12, .board = "chessboard:9x6:0.025", .source = "t",
 				       .n_views = 2, .view_rms_px = rms, .view_pose = pose,
-				       .has_std = true, .std_K = {1, 2, 3, 4}, .has_focus = true,
-				       .focus = 120, .verdict = "good"};
+				       .has_std = true, .std_K = {1, 2, 3, 4}, .verdict = "good"};
 	char path[] = "/tmp/mvod-test-calibrate-XXXXXX";
 	int fd = mkstemp(path);
 	assert_true(fd >= 0);
@@ -170,6 +170,7 @@ static void file_records_the_calibration(void **state)
 	char err[256];
 	assert_int_equal(mvod_calib_load(path, &r, err, sizeof(err)), 0);
 	assert_true(r.fx == 500 && r.n_dist == 5);
+	assert_true(r.has_focus && r.focus == 120);
 	char text[4096] = "";
 	FILE *f = fopen(path, "r");
 	assert_non_null(f);

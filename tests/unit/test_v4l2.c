@@ -668,16 +668,20 @@ static int index_of(const struct statuses *s, int8_t state, int from)
 	return -1;
 }
 
-/* A full run (mvod_run over memq) on the fake device until *stop, with its statuses. */
-static void run_fake(volatile sig_atomic_t *stop, struct statuses *got,
-		     struct mvod_run_summary *sum)
+/*
+ * A full run (mvod_run over memq) on the fake device until *stop, with its statuses; the
+ * calibration records calib_focus unless it is NaN.
+ */
+static void run_fake_focus(volatile sig_atomic_t *stop, struct statuses *got,
+			   struct mvod_run_summary *sum, double calib_focus)
 {
 	char calib[64] = "/tmp/mvod-test-v4l2-XXXXXX";
 	int fd = mkstemp(calib);
 	assert_true(fd >= 0);
 	close(fd);
 	struct mvod_camera cam = {.width = W, .height = H, .fx = 50, .fy = 50, .cx = W / 2.0,
-				  .cy = H / 2.0};
+				  .cy = H / 2.0, .has_focus = !isnan(calib_focus),
+				  .focus = isnan(calib_focus) ? 0 : calib_focus};
 	assert_int_equal(mvod_calib_save(calib, &cam, NULL), 0);
 
 	lcm_t *lcm = lcm_create("memq://");
@@ -696,6 +700,55 @@ static void run_fake(volatile sig_atomic_t *stop, struct statuses *got,
 	mvod_ipc_destroy(ipc);
 	mvod_status_t_unsubscribe(lcm, sub);
 	lcm_destroy(lcm);
+}
+
+static void run_fake(volatile sig_atomic_t *stop, struct statuses *got,
+		     struct mvod_run_summary *sum)
+{
+	run_fake_focus(stop, got, sum, NAN);
+}
+
+/*
+ * A calibration made at focus 100 on a camera whose lens is held at 120: the run warns with
+ * both values; at 120 it says nothing. stderr is captured in a file for the check.
+ */
+static void focus_run(double calib_focus, char *log, size_t len)
+{
+	reset(V4L2_PIX_FMT_GREY);
+	F.ctrls[F.n_ctrls++] = (struct ctrl){V4L2_CID_FOCUS_AUTO, 1};
+	F.ctrls[F.n_ctrls++] = (struct ctrl){V4L2_CID_FOCUS_ABSOLUTE, 120};
+	for (int i = 0; i < 3; i++)
+		add_frame(i, (uint32_t)i);
+	static volatile sig_atomic_t stop;
+	stop = 0;
+	F.done = &stop;
+	FILE *cap = tmpfile();
+	assert_non_null(cap);
+	fflush(stderr);
+	int saved = dup(2);
+	dup2(fileno(cap), 2);
+	struct statuses got = {0};
+	struct mvod_run_summary sum;
+	run_fake_focus(&stop, &got, &sum, calib_focus);
+	fflush(stderr);
+	dup2(saved, 2);
+	close(saved);
+	rewind(cap);
+	size_t n = fread(log, 1, len - 1, cap);
+	log[n] = '\0';
+	fclose(cap);
+}
+
+static void test_focus_against_calibration(void **state)
+{
+	(void)state;
+	char log[8192];
+	focus_run(100, log, sizeof(log));
+	if (!strstr(log, "calibration was made at focus 100 but the camera is at 120"))
+		fail_msg("no focus warning in:\n%s", log);
+	focus_run(120, log, sizeof(log));
+	assert_null(strstr(log, "calibration was made at focus"));
+	assert_non_null(strstr(log, "focus held at 120"));
 }
 
 /*
@@ -755,6 +808,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_formats),
+		cmocka_unit_test(test_focus_against_calibration),
 		cmocka_unit_test(test_eintr),
 		cmocka_unit_test(test_eagain_storm),
 		cmocka_unit_test(test_refused_format_and_size),
