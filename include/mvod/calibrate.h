@@ -5,6 +5,7 @@
 #ifndef MVOD_CALIBRATE_H
 #define MVOD_CALIBRATE_H
 
+#include <signal.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -31,6 +32,11 @@ struct mvod_calib_opts {
 	int min_corners;           /* corners a view needs; 0 = all of a chessboard, 6 of ChArUco */
 	int64_t max_frames;        /* stop reading after this many frames; 0 = the whole source */
 	const char *report;        /* PNG to write (coverage, errors, undistortion), or NULL */
+	/*
+	 * Reading stops when *stop becomes non-zero (Ctrl-C on a live camera, which never ends)
+	 * and the frames read so far are calibrated. May be NULL. Borrowed.
+	 */
+	volatile sig_atomic_t *stop;
 };
 
 /* Fills the defaults above; source and board are left for the caller. */

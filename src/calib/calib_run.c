@@ -203,6 +203,9 @@ static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
 	return ret;
 }
 
+/* A live camera or a long video says how it is going this often, in seconds. */
+#define PROGRESS_S 5.0
+
 static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 		    struct mvod_calib_det *det, struct store *s, struct scan *sc, char *err,
 		    size_t errlen)
@@ -211,7 +214,13 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 	struct mvod_calib_found f = {.ids = malloc(sizeof(int) * (size_t)cap),
 				     .xy = malloc(2 * sizeof(float) * (size_t)cap)};
 	int ret = f.ids && f.xy ? 0 : -ENOMEM;
-	while (!ret && !(o->max_frames && sc->frames >= o->max_frames)) {
+	double next_progress = now_s() + PROGRESS_S;
+	while (!ret && !(o->max_frames && sc->frames >= o->max_frames) && !(o->stop && *o->stop)) {
+		if (now_s() >= next_progress) {
+			LOG(INFO, "calibrate: %lld frames read, %lld with the board so far",
+			    (long long)sc->frames, (long long)sc->with_board);
+			next_progress += PROGRESS_S;
+		}
 		struct mvod_frame fr;
 		ret = mvod_source_read(src, &fr);
 		if (ret == -ENODATA || ret == -EAGAIN || ret == -EINVAL) {
@@ -230,6 +239,9 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 			mvod_errf(err, errlen, ret, "%s: frame %lld: board detection failed: %s",
 				  o->source, (long long)fr.index, strerror(-ret));
 	}
+	if (!ret && o->stop && *o->stop)
+		LOG(INFO, "calibrate: stopped after %lld frames (%lld with the board); calibrating on "
+			  "them (Ctrl-C again aborts)", (long long)sc->frames, (long long)sc->with_board);
 	free(f.ids);
 	free(f.xy);
 	return ret > 0 ? 0 : ret;

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +19,10 @@ static void usage(FILE *out)
 "the image and the range of board tilts, calibrates the camera, drops views whose error is\n"
 "far above the rest and calibrates again, and writes mvod JSON (mvod-calibration/1).\n"
 "\n"
-"  --source URI          frames to read: file:VIDEO, images:DIR, kitti:SEQDIR (required)\n"
+"  --source URI          frames to read (required): file:VIDEO, images:DIR, or a live\n"
+"                        camera (v4l2:/dev/video0, libcamera:0; see mvod --list-cameras):\n"
+"                        press Ctrl-C when enough views are recorded, and mvod calibrates\n"
+"                        on them (a second Ctrl-C aborts)\n"
 "  --board SPEC          the target (required); make one with mvod board:\n"
 "                          charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT  (COLSxROWS squares)\n"
 "                          chessboard:COLSxROWS:SQUARE_M             (inner corners)\n"
@@ -171,6 +175,14 @@ static void print_result(const struct cli *c, const struct mvod_calib_result *r)
 	       c->o.report ? c->o.report : "");
 }
 
+static volatile sig_atomic_t stop_reading;
+
+static void on_stop(int sig)
+{
+	(void)sig;
+	stop_reading = 1;
+}
+
 int mvod_cmd_calibrate(int argc, char **argv)
 {
 	struct cli c = {0};
@@ -180,6 +192,14 @@ int mvod_cmd_calibrate(int argc, char **argv)
 	/* Found out now, not after an hour of video. */
 	if (cli_check_writable("out", c.out) || (c.o.report && cli_check_writable("report", c.o.report)))
 		return EXIT_FAILURE;
+	/*
+	 * A live camera never ends: the first Ctrl-C ends the recording and calibrates on it;
+	 * SA_RESETHAND lets a second one abort as usual.
+	 */
+	struct sigaction sa = {.sa_handler = on_stop, .sa_flags = SA_RESETHAND};
+	sigaction(SIGINT, &sa, NULL);
+	sigaction(SIGTERM, &sa, NULL);
+	c.o.stop = &stop_reading;
 	struct mvod_calib_result res;
 	char err[512];
 	ret = mvod_calibrate(&c.o, &res, err, sizeof(err));

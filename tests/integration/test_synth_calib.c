@@ -16,6 +16,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -154,6 +158,63 @@ static void selection_spreads(void **state)
 	assert_true(span >= 60);
 }
 
+static int file_has(const char *path, const char *needle)
+{
+	char buf[16384] = "";
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return 0;
+	size_t n = fread(buf, 1, sizeof(buf) - 1, f);
+	buf[n] = '\0';
+	fclose(f);
+	return strstr(buf, needle) != NULL;
+}
+
+/*
+ * A live camera never ends: Ctrl-C ends the recording and mvod calibrates on the frames read.
+ * A 10 s video played in real time stands in for the camera; the interrupt comes once the
+ * first progress line (after 5 s) shows frames were read.
+ */
+static void interrupt_calibrates_what_was_read(void **state)
+{
+	(void)state;
+	const struct calib_case c = {"live", "charuco:5x7:0.04:0.02:DICT_6X6_250", "mkv", "100",
+				     {NULL, NULL}, "pinhole", NULL, 0};
+	char dir[256], source[300], out[300], log[300];
+	snprintf(dir, sizeof(dir), "%s/%s", harness_tmpdir(), c.name);
+	render(dir, &c);
+	snprintf(source, sizeof(source), "file:%s/video.mkv?realtime=1", dir);
+	snprintf(out, sizeof(out), "%s/est.json", dir);
+	snprintf(log, sizeof(log), "%s/log.txt", dir);
+	pid_t pid = fork();
+	assert_true(pid >= 0);
+	if (pid == 0) {
+		int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		dup2(fd, 1);
+		dup2(fd, 2);
+		execl(harness_bin("MVOD"), "mvod", "calibrate", "--source", source, "--board", c.board,
+		      "--out", out, (char *)NULL);
+		_exit(127);
+	}
+	int st;
+	while (!file_has(log, "with the board so far")) {
+		if (waitpid(pid, &st, WNOHANG) == pid)
+			fail_msg("mvod calibrate ended before the interrupt (status %d)", st);
+		usleep(10000);
+	}
+	kill(pid, SIGINT);
+	waitpid(pid, &st, 0);
+	assert_true(WIFEXITED(st));
+	assert_int_equal(WEXITSTATUS(st), 0);
+	assert_true(file_has(log, "calibrating on them"));
+	assert_true(file_has(log, "wrote"));
+	assert_false(file_has(log, "100 frames read"));
+	struct mvod_camera est;
+	char err[256];
+	assert_int_equal(mvod_calib_load(out, &est, err, sizeof(err)), 0);
+	assert_true(rel(est.fx, 500) < INTRINSICS_BOUND);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -162,6 +223,7 @@ int main(void)
 		cmocka_unit_test(charuco_fisheye),
 		cmocka_unit_test(charuco_inverted),
 		cmocka_unit_test(selection_spreads),
+		cmocka_unit_test(interrupt_calibrates_what_was_read),
 	};
 	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }
