@@ -78,6 +78,12 @@ int mvod_view_write_png(const struct mvod_view *v, int64_t now_us,
 			const struct mvod_view_labels *labels, const char *path);
 
 /*
+ * Whether the display in DISPLAY (or else WAYLAND_DISPLAY) accepts a connection: OpenCV's Qt
+ * backend aborts the process when it cannot connect. 0, or -errno with the reason in err.
+ */
+int mvod_view_display_check(char *err, size_t errlen);
+
+/*
  * A window on the display (OpenCV highgui). open fails with a reason in err when there is no
  * GUI backend. show draws the picture and handles the window's events for a few milliseconds;
  * *quit becomes true when the user pressed q or Esc or closed the window.

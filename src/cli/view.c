@@ -225,8 +225,10 @@ static int run_headless(struct viewer *w)
 /* Messages are handled between redraws; after the end of a log the picture stays. */
 static int run_window(struct viewer *w)
 {
-	char err[256];
-	int ret = mvod_view_window_open(WINDOW_NAME, err, sizeof(err));
+	char err[512];
+	int ret = mvod_view_display_check(err, sizeof(err));
+	if (!ret)
+		ret = mvod_view_window_open(WINDOW_NAME, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s: pass --png FILE to draw into a PNG instead", err);
 		return ret;
