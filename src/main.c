@@ -14,6 +14,7 @@ static const struct command commands[] = {
 	{"calibrate", mvod_cmd_calibrate},
 	{"board", mvod_cmd_board},
 	{"calib-convert", mvod_cmd_convert},
+	{"view", mvod_cmd_view},
 };
 
 int main(int argc, char **argv)
@@ -28,7 +29,7 @@ int main(int argc, char **argv)
 			}
 		}
 		fprintf(stderr, "mvod: unknown command '%s'; the commands are run, calibrate, board, "
-				"calib-convert and bench (see mvod --help)\n", argv[1]);
+				"calib-convert, bench and view (see mvod --help)\n", argv[1]);
 		return EXIT_USAGE;
 	}
 	return mvod_cmd_run(argc, argv);

@@ -79,5 +79,6 @@ int mvod_cmd_run(int argc, char **argv);
 int mvod_cmd_calibrate(int argc, char **argv);
 int mvod_cmd_board(int argc, char **argv);
 int mvod_cmd_convert(int argc, char **argv);
+int mvod_cmd_view(int argc, char **argv);
 
 #endif

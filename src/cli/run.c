@@ -26,7 +26,7 @@ static void usage(FILE *out)
 	fprintf(out,
 "Usage: mvod [run] --source URI [options]\n"
 "       mvod --list-cameras\n"
-"       mvod calibrate|board|calib-convert|bench ...   (mvod COMMAND --help)\n"
+"       mvod calibrate|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
 "Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
 "\n");
 	cli_usage_input(out);
@@ -54,6 +54,7 @@ static void usage(FILE *out)
 "  board                 write a printable calibration target\n"
 "  calib-convert IN OUT  convert OpenCV/ROS/KITTI calibration files to mvod JSON\n"
 "  bench                 measure accuracy and speed against ground truth\n"
+"  view                  draw the path, heading, state and rates of a running mvod\n"
 "\n"
 "Examples:\n"
 "  mvod --source 'v4l2:/dev/video0?width=640&height=480&fps=30&format=YUYV' \\\n"

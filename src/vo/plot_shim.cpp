@@ -17,7 +17,7 @@
 
 namespace {
 
-const int CANVAS_W = 1000, CANVAS_H = 800;
+const int CANVAS_W = MVOD_PLOT_WIDTH, CANVAS_H = MVOD_PLOT_HEIGHT;
 /* Left: z tick labels and the rotated axis label; bottom: x tick labels and axis label. */
 const cv::Rect PLOT_RECT(90, 60, CANVAS_W - 90 - 30, CANVAS_H - 60 - 80);
 /* Room inside the frame for markers and the heading arrow. */
@@ -410,13 +410,32 @@ int plot_topdown(const char *path, const char *title, const Path &est, const dou
 	return mvod_write_replace(path, png.data(), png.size());
 }
 
+bool paths_ok(const double *est_xyz, int n_est, const double *gt_xyz, int n_gt)
+{
+	return n_est >= 0 && n_gt >= 0 && (n_est == 0 || est_xyz) && (n_gt == 0 || gt_xyz);
+}
+
 } // namespace
 
 extern "C" int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz,
 				 int n_est, const double heading[9], const double *gt_xyz, int n_gt)
 {
-	if (!path || n_est < 0 || n_gt < 0 || (n_est > 0 && !est_xyz) || (n_gt > 0 && !gt_xyz))
+	if (!path || !paths_ok(est_xyz, n_est, gt_xyz, n_gt))
 		return -EINVAL;
 	return mvod_guarded(
 		[&] { return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}); });
+}
+
+extern "C" int mvod_plot_topdown_draw(struct mvod_image *out, const char *title,
+				      const double *est_xyz, int n_est, const double heading[9],
+				      const double *gt_xyz, int n_gt)
+{
+	if (!out || !out->data || out->fmt != MVOD_PIX_BGR || out->w != CANVAS_W ||
+	    out->h != CANVAS_H || !paths_ok(est_xyz, n_est, gt_xyz, n_gt))
+		return -EINVAL;
+	return mvod_guarded([&] {
+		cv::Mat dst(out->h, out->w, CV_8UC3, out->data, (size_t)out->stride);
+		render(title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}).copyTo(dst);
+		return 0;
+	});
 }

@@ -1,0 +1,156 @@
+#include "mvod/view.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "mvod_pose_t.h"
+#include "mvod_status_t.h"
+
+/* A second of poses is enough for a steady rate and short enough to follow a change. */
+#define RATE_WINDOW_US 1000000
+/* No pose for this long: the rate shown is stale, and the panel says since when. */
+#define STALE_US 2000000
+
+int mvod_view_init(struct mvod_view *v, int max_poses)
+{
+	*v = (struct mvod_view){.state = MVOD_STATE_STARTING, .pose_hz = NAN};
+	mvod_pose_identity(&v->pose);
+	return mvod_path_init(&v->path, max_poses);
+}
+
+void mvod_view_fini(struct mvod_view *v)
+{
+	mvod_path_fini(&v->path);
+}
+
+static void update_rate(struct mvod_view *v, int64_t recv_us)
+{
+	if (v->poses == 1 || recv_us < v->rate_start_us) {
+		v->rate_start_us = recv_us;
+		v->rate_start_poses = 1;
+		return;
+	}
+	int64_t dt = recv_us - v->rate_start_us;
+	if (dt < RATE_WINDOW_US)
+		return;
+	v->pose_hz = (double)(v->poses - v->rate_start_poses) * 1e6 / (double)dt;
+	v->rate_start_us = recv_us;
+	v->rate_start_poses = v->poses;
+}
+
+void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t recv_us)
+{
+	v->poses++;
+	memcpy(v->pose.t, msg->position, sizeof(v->pose.t));
+	mvod_quat_to_rot(msg->orientation, v->pose.R);
+	v->frame = msg->frame;
+	v->state = (enum mvod_track_state)msg->state;
+	v->scale_source = msg->scale_source;
+	v->frame_status = msg->frame_status;
+	v->features = msg->features;
+	v->matches = msg->matches;
+	v->inliers = msg->inliers;
+	mvod_path_add(&v->path, v->pose.t);
+	v->last_pose_us = recv_us;
+	update_rate(v, recv_us);
+}
+
+void mvod_view_add_status(struct mvod_view *v, const mvod_status_t *msg)
+{
+	v->statuses++;
+	v->state = (enum mvod_track_state)msg->state;
+	v->status = (struct mvod_status){
+		.utime = msg->utime,
+		.fps = msg->fps,
+		.stage_ms = {msg->capture_ms, msg->preprocess_ms, msg->detect_ms, msg->match_ms,
+			     msg->pose_ms},
+		.features = msg->features,
+		.matches = msg->matches,
+		.inliers = msg->inliers,
+		.frames = msg->frames,
+		.dropped = msg->dropped_frames,
+		.rss_kb = msg->rss_kb,
+		.uptime_s = msg->uptime_s,
+		.state = (enum mvod_track_state)msg->state,
+	};
+}
+
+double mvod_view_yaw_deg(const struct mvod_view *v)
+{
+	/* Forward is the camera's z axis: the third column of camera-to-world. */
+	double fx = v->pose.R[2], fz = v->pose.R[8];
+	if (!v->poses || !(hypot(fx, fz) > 1e-6))
+		return NAN;
+	double deg = atan2(fx, fz) * 180.0 / M_PI;
+	return deg <= -180.0 ? 180.0 : deg;
+}
+
+static void row(struct mvod_view_row *rows, int max_rows, int *n, const char *label,
+		const char *fmt, ...) __attribute__((format(printf, 5, 6)));
+
+static void row(struct mvod_view_row *rows, int max_rows, int *n, const char *label,
+		const char *fmt, ...)
+{
+	if (*n >= max_rows)
+		return;
+	struct mvod_view_row *r = &rows[(*n)++];
+	snprintf(r->label, sizeof(r->label), "%s", label);
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(r->value, sizeof(r->value), fmt, ap);
+	va_end(ap);
+}
+
+static void pose_rows(const struct mvod_view *v, int64_t now_us, struct mvod_view_row *rows,
+		      int max, int *n)
+{
+	row(rows, max, n, "frame", "%lld (%s)", (long long)v->frame,
+	    mvod_frame_status_name((enum mvod_frame_status)v->frame_status));
+	row(rows, max, n, "position [m]", "%.2f %.2f %.2f", v->pose.t[0], v->pose.t[1],
+	    v->pose.t[2]);
+	row(rows, max, n, "scale from", "%s",
+	    mvod_scale_source_name((enum mvod_scale_source)v->scale_source));
+	row(rows, max, n, "feat/match/inl", "%d / %d / %d", v->features, v->matches, v->inliers);
+	double idle_s = (double)(now_us - v->last_pose_us) / 1e6;
+	if (idle_s * 1e6 >= STALE_US)
+		row(rows, max, n, "poses received", "none for %.0f s", idle_s);
+	else if (isnan(v->pose_hz))
+		row(rows, max, n, "poses received", "measuring");
+	else
+		row(rows, max, n, "poses received", "%.1f /s", v->pose_hz);
+}
+
+static void status_rows(const struct mvod_view *v, struct mvod_view_row *rows, int max, int *n)
+{
+	const struct mvod_status *s = &v->status;
+	long long up = (long long)s->uptime_s;
+	row(rows, max, n, "mvod fps", "%.1f", s->fps);
+	row(rows, max, n, "frames", "%lld", (long long)s->frames);
+	row(rows, max, n, "dropped frames", "%lld", (long long)s->dropped);
+	row(rows, max, n, "ms detect/match", "%.1f / %.1f", s->stage_ms[MVOD_STAGE_DETECT],
+	    s->stage_ms[MVOD_STAGE_MATCH]);
+	row(rows, max, n, "ms capt/prep/pose", "%.1f / %.1f / %.1f",
+	    s->stage_ms[MVOD_STAGE_CAPTURE], s->stage_ms[MVOD_STAGE_PREPROCESS],
+	    s->stage_ms[MVOD_STAGE_POSE]);
+	row(rows, max, n, "RSS", "%.1f MiB", (double)s->rss_kb / 1024.0);
+	row(rows, max, n, "uptime", "%lld:%02lld:%02lld", up / 3600, up / 60 % 60, up % 60);
+}
+
+int mvod_view_rows(const struct mvod_view *v, int64_t now_us, struct mvod_view_row *rows,
+		   int max_rows)
+{
+	int n = 0;
+	if (v->poses)
+		pose_rows(v, now_us, rows, max_rows, &n);
+	else
+		row(rows, max_rows, &n, "poses", "none yet");
+	if (v->statuses)
+		status_rows(v, rows, max_rows, &n);
+	else
+		row(rows, max_rows, &n, "status", "none yet");
+	row(rows, max_rows, &n, "messages", "%lld poses, %lld status", (long long)v->poses,
+	    (long long)v->statuses);
+	return n;
+}

@@ -1,0 +1,148 @@
+/* The viewer's state: heading, pose rate, fixed memory, newest state, and the panel's rows. */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "mvod/plot.h"
+#include "mvod/view.h"
+#include "mvod_pose_t.h"
+#include "mvod_status_t.h"
+
+static mvod_pose_t pose_at(double z, double yaw_deg)
+{
+	/* A turn about the y axis (down): +yaw swings forward (+z) towards +x. */
+	double h = yaw_deg * M_PI / 360.0;
+	return (mvod_pose_t){.position = {0, 0, z}, .orientation = {cos(h), 0, sin(h), 0},
+			     .state = MVOD_POSE_T_STATE_TRACKING};
+}
+
+static const char *value_of(const struct mvod_view_row *rows, int n, const char *label)
+{
+	for (int i = 0; i < n; i++)
+		if (strcmp(rows[i].label, label) == 0)
+			return rows[i].value;
+	fail_msg("no row '%s'", label);
+	return NULL;
+}
+
+static void test_yaw(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	assert_true(isnan(mvod_view_yaw_deg(&v)));
+	static const double yaws[] = {0, 30, -90, 179.5, 180};
+	for (size_t i = 0; i < sizeof(yaws) / sizeof(yaws[0]); i++) {
+		mvod_pose_t p = pose_at(0, yaws[i]);
+		mvod_view_add_pose(&v, &p, 0);
+		/* Through a quaternion and atan2: exact to rounding. */
+		assert_true(fabs(mvod_view_yaw_deg(&v) - yaws[i]) < 1e-9);
+	}
+	/* Looking straight down (pitch 90 deg about x): no heading on the ground plane. */
+	mvod_pose_t down = {.orientation = {cos(M_PI / 4), sin(M_PI / 4), 0, 0}};
+	mvod_view_add_pose(&v, &down, 0);
+	assert_true(isnan(mvod_view_yaw_deg(&v)));
+	mvod_view_fini(&v);
+}
+
+static void test_rate_and_staleness(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	struct mvod_view_row rows[MVOD_VIEW_MAX_ROWS];
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	/* 20 Hz for 3 s on the receive clock. */
+	int64_t t = 0;
+	for (int i = 0; i < 61; i++, t += 50000) {
+		mvod_pose_t p = pose_at(i, 0);
+		mvod_view_add_pose(&v, &p, t);
+	}
+	assert_true(fabs(v.pose_hz - 20.0) < 1e-9);
+	int n = mvod_view_rows(&v, t, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "poses received"), "20.0 /s");
+	/* Nothing for 5 s: the rate is not shown as if mvod were still running. */
+	n = mvod_view_rows(&v, t + 5000000, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "poses received"), "none for 5 s");
+	mvod_view_fini(&v);
+}
+
+static void test_memory_fixed(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	double *buf = v.path.xyz;
+	for (int i = 0; i < 100000; i++) {
+		mvod_pose_t p = pose_at(i, 0);
+		mvod_view_add_pose(&v, &p, i);
+	}
+	assert_ptr_equal(v.path.xyz, buf);
+	assert_true(v.path.n <= 100 && v.path.n >= 50);
+	assert_int_equal(v.poses, 100000);
+	/* The latest pose is kept whole, whatever the path dropped. */
+	assert_true(v.pose.t[2] == 99999.0);
+	mvod_view_fini(&v);
+}
+
+static void test_newest_state_and_rows(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	struct mvod_view_row rows[MVOD_VIEW_MAX_ROWS];
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	int n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "poses"), "none yet");
+	mvod_pose_t p = pose_at(1, 0);
+	mvod_view_add_pose(&v, &p, 0);
+	assert_int_equal(v.state, MVOD_STATE_TRACKING);
+	/* Status comes on its own while the source is away, with no pose: it wins. */
+	mvod_status_t st = {.state = MVOD_POSE_T_STATE_SOURCE_DOWN, .fps = 29.75f,
+			    .dropped_frames = 7, .rss_kb = 51200, .uptime_s = 3725.4};
+	mvod_view_add_status(&v, &st);
+	assert_int_equal(v.state, MVOD_STATE_SOURCE_DOWN);
+	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "mvod fps"), "29.8");
+	assert_string_equal(value_of(rows, n, "dropped frames"), "7");
+	assert_string_equal(value_of(rows, n, "RSS"), "50.0 MiB");
+	assert_string_equal(value_of(rows, n, "uptime"), "1:02:05");
+	assert_string_equal(value_of(rows, n, "messages"), "1 poses, 1 status");
+	/* A short array gets the first rows, not an overflow. */
+	assert_int_equal(mvod_view_rows(&v, 0, rows, 2), 2);
+	mvod_view_fini(&v);
+}
+
+static void test_plot_draw_checks_image(void **state)
+{
+	(void)state;
+	static uint8_t px[MVOD_PLOT_HEIGHT][MVOD_PLOT_WIDTH][3];
+	const double xyz[] = {0, 0, 0, 1, 0, 2};
+	struct mvod_image img = {MVOD_PLOT_WIDTH, MVOD_PLOT_HEIGHT, MVOD_PLOT_WIDTH * 3,
+				 MVOD_PIX_BGR, &px[0][0][0]};
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), 0);
+	/* The plot's white background is there, written through the caller's view. */
+	assert_int_equal(px[0][0][0], 255);
+	img.w = 640;
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), -EINVAL);
+	img.w = MVOD_PLOT_WIDTH;
+	img.fmt = MVOD_PIX_GREY;
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), -EINVAL);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_yaw),
+		cmocka_unit_test(test_rate_and_staleness),
+		cmocka_unit_test(test_memory_fixed),
+		cmocka_unit_test(test_newest_state_and_rows),
+		cmocka_unit_test(test_plot_draw_checks_image),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
