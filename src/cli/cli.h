@@ -25,7 +25,8 @@ extern const char *cli_prog;
 /* Option ids of the shared groups; each command numbers its own from CLI_OPT_OWN. */
 enum cli_opt_id {
 	CLI_OPT_SOURCE = 256, CLI_OPT_CALIB, CLI_OPT_GT, CLI_OPT_MAX_FRAMES,
-	CLI_OPT_SCALE, CLI_OPT_FEATURES, CLI_OPT_RATIO, CLI_OPT_NO_CROSS, CLI_OPT_ROBUST,
+	CLI_OPT_SCALE, CLI_OPT_DETECTOR, CLI_OPT_MATCHER, CLI_OPT_FEATURES, CLI_OPT_RATIO,
+	CLI_OPT_BEST, CLI_OPT_ROBUST,
 	CLI_OPT_RANSAC_PX, CLI_OPT_CONFIDENCE, CLI_OPT_MIN_PARALLAX, CLI_OPT_RESIZE, CLI_OPT_BLUR,
 	CLI_OPT_LOG_LEVEL, CLI_OPT_VERSION,
 	CLI_OPT_OWN = 512,
@@ -61,5 +62,6 @@ int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn
 
 /* Subcommands: argv[0] is the subcommand's name. Return the process exit status. */
 int mvod_cmd_run(int argc, char **argv);
+int mvod_cmd_bench(int argc, char **argv);
 
 #endif
