@@ -11,6 +11,7 @@ struct command {
 
 static const struct command commands[] = {
 	{"run", mvod_cmd_run},
+	{"bench", mvod_cmd_bench},
 };
 
 int main(int argc, char **argv)

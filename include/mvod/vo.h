@@ -71,6 +71,8 @@ enum mvod_matcher_kind {
 };
 int mvod_matcher_kind_parse(const char *name, enum mvod_matcher_kind *out);
 const char *mvod_matcher_kind_name(enum mvod_matcher_kind m);
+/* Whether the kind applies Lowe's ratio test (and so reads mvod_vo_params.ratio). */
+bool mvod_matcher_uses_ratio(enum mvod_matcher_kind m);
 
 /* What happened to a frame (the "mark" on a frame whose pose was held). */
 enum mvod_frame_status {

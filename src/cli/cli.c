@@ -277,3 +277,13 @@ int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn
 	}
 	return 0;
 }
+
+/*
+ * FFmpeg prints its own diagnostics for a corrupt file before mvod can say which file and what
+ * to do; keep them for --log-level debug. A value the user exported wins.
+ */
+void cli_quiet_ffmpeg(void)
+{
+	if (mvod_log_get_level() < MVOD_LOG_DEBUG)
+		setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
+}

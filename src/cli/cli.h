@@ -19,6 +19,9 @@ int cli_parse_double(const char *opt, const char *s, double lo, double hi, doubl
 int cli_parse_int(const char *opt, const char *s, long lo, long hi, long *out);
 bool cli_has_suffix(const char *s, const char *suffix);
 
+/* Leaves FFmpeg's own diagnostics for --log-level debug: mvod's message says what to do. */
+void cli_quiet_ffmpeg(void);
+
 /* The subcommand's name for messages ("mvod", "mvod calibrate", ...). */
 extern const char *cli_prog;
 

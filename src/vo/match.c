@@ -23,7 +23,7 @@ static bool uses_flann(enum mvod_matcher_kind k)
 	return k == MVOD_MATCHER_FLANN || k == MVOD_MATCHER_FLANN_RATIO;
 }
 
-static bool uses_ratio(enum mvod_matcher_kind k)
+bool mvod_matcher_uses_ratio(enum mvod_matcher_kind k)
 {
 	return k == MVOD_MATCHER_BF || k == MVOD_MATCHER_BF_RATIO || k == MVOD_MATCHER_FLANN_RATIO;
 }
@@ -183,7 +183,7 @@ int mvod_match(struct mvod_matcher *m, const struct mvod_features *a,
 	int ret = neighbours(m, a, b);
 	if (ret)
 		return ret;
-	bool ratio = uses_ratio(m->p.kind) && m->p.ratio < 1.0;
+	bool ratio = mvod_matcher_uses_ratio(m->p.kind) && m->p.ratio < 1.0;
 	bool cross = uses_cross_check(m->p.kind);
 	int n = 0;
 	for (int i = 0; i < a->n && n < cap; i++) {

@@ -36,16 +36,19 @@ const cv::Scalar WHITE(255, 255, 255), BLACK(0, 0, 0), GRID(225, 225, 225);
 const cv::Scalar EST_COLOR(190, 90, 20), GT_COLOR(70, 70, 70), START_COLOR(40, 160, 40),
 	HEADING_COLOR(30, 30, 210), NEUTRAL(110, 110, 110);
 
-/* World (x, z) in metres to pixels of the plot area: x right, z (forward) up, equal aspect. */
+/*
+ * Data (x, z) to pixels of a w x h plot area centred on (cx, cz): x right, z up. The top-down
+ * view has sx = sz (metres on both axes); a chart scales each axis to its data.
+ */
 struct View {
-	double cx, cz, scale;
+	double cx, cz, sx, sz;
+	int w, h;
 	cv::Point2d px(double x, double z) const
 	{
-		return {PLOT_RECT.width / 2.0 + (x - cx) * scale,
-			PLOT_RECT.height / 2.0 - (z - cz) * scale};
+		return {w / 2.0 + (x - cx) * sx, h / 2.0 - (z - cz) * sz};
 	}
-	double x_at(double u) const { return cx + (u - PLOT_RECT.width / 2.0) / scale; }
-	double z_at(double v) const { return cz - (v - PLOT_RECT.height / 2.0) / scale; }
+	double x_at(double u) const { return cx + (u - w / 2.0) / sx; }
+	double z_at(double v) const { return cz - (v - h / 2.0) / sz; }
 };
 
 struct Path {
@@ -102,7 +105,8 @@ View fit_view(const Path &est, const Path &gt)
 	double span_z = std::max(hi.y - lo.y, MIN_EXTENT_M);
 	double scale = std::min((PLOT_RECT.width - 2 * PAD_PX) / span_x,
 				(PLOT_RECT.height - 2 * PAD_PX) / span_z);
-	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, scale};
+	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, scale, scale, PLOT_RECT.width,
+		PLOT_RECT.height};
 }
 
 /* The smallest 1, 2 or 5 x 10^k that is at least raw. */
@@ -136,45 +140,46 @@ cv::Size text_size(const std::string &s, double size, int thick = 1)
 	return cv::getTextSize(s, FONT, size, thick, &baseline);
 }
 
-void draw_x_ticks(cv::Mat &canvas, cv::Mat &plot, const View &v, double step)
+/* rect: where the plot area sits on the canvas. */
+void draw_x_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
+		  double step)
 {
-	for (long k = std::lround(std::ceil(v.x_at(0) / step));
-	     k * step <= v.x_at(PLOT_RECT.width); k++) {
+	for (long k = std::lround(std::ceil(v.x_at(0) / step)); k * step <= v.x_at(rect.width);
+	     k++) {
 		int u = (int)std::lround(v.px(k * step, 0).x);
-		cv::line(plot, {u, 0}, {u, PLOT_RECT.height}, GRID, 1);
+		cv::line(plot, {u, 0}, {u, rect.height}, GRID, 1);
 		std::string s = tick_label(k * step, step);
 		cv::Size ts = text_size(s, 0.5);
-		put_text(canvas, s, {PLOT_RECT.x + u - ts.width / 2, PLOT_RECT.br().y + 22}, 0.5);
+		put_text(canvas, s, {rect.x + u - ts.width / 2, rect.br().y + 22}, 0.5);
 	}
 }
 
-void draw_z_ticks(cv::Mat &canvas, cv::Mat &plot, const View &v, double step)
+void draw_z_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
+		  double step)
 {
-	for (long k = std::lround(std::ceil(v.z_at(PLOT_RECT.height) / step));
-	     k * step <= v.z_at(0); k++) {
+	for (long k = std::lround(std::ceil(v.z_at(rect.height) / step)); k * step <= v.z_at(0);
+	     k++) {
 		int w = (int)std::lround(v.px(0, k * step).y);
-		cv::line(plot, {0, w}, {PLOT_RECT.width, w}, GRID, 1);
+		cv::line(plot, {0, w}, {rect.width, w}, GRID, 1);
 		std::string s = tick_label(k * step, step);
 		cv::Size ts = text_size(s, 0.5);
-		put_text(canvas, s, {PLOT_RECT.x - 8 - ts.width, PLOT_RECT.y + w + ts.height / 2},
-			 0.5);
+		put_text(canvas, s, {rect.x - 8 - ts.width, rect.y + w + ts.height / 2}, 0.5);
 	}
 }
 
-void draw_axis_labels(cv::Mat &canvas)
+void draw_axis_labels(cv::Mat &canvas, const cv::Rect &rect, const std::string &xl,
+		      const std::string &zl)
 {
-	const std::string xl = "x [m]", zl = "z [m]";
 	cv::Size xs = text_size(xl, 0.65);
-	put_text(canvas, xl, {PLOT_RECT.x + (PLOT_RECT.width - xs.width) / 2, CANVAS_H - 20},
-		 0.65);
+	put_text(canvas, xl, {rect.x + (rect.width - xs.width) / 2, rect.br().y + 50}, 0.65);
 
 	/* putText cannot rotate: render the label on its own, turn it, paste it. */
 	cv::Size zs = text_size(zl, 0.65);
 	cv::Mat label(zs.height + 10, zs.width + 4, CV_8UC3, WHITE), turned;
 	put_text(label, zl, {2, zs.height + 3}, 0.65);
 	cv::rotate(label, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-	turned.copyTo(canvas(cv::Rect(12, PLOT_RECT.y + (PLOT_RECT.height - turned.rows) / 2,
-				      turned.cols, turned.rows)));
+	int top = std::max(0, rect.y + (rect.height - turned.rows) / 2);
+	turned.copyTo(canvas(cv::Rect(12, top, turned.cols, turned.rows)));
 }
 
 void draw_title(cv::Mat &canvas, const char *title)
@@ -189,13 +194,14 @@ void draw_title(cv::Mat &canvas, const char *title)
 	put_text(canvas, title, {(CANVAS_W - ts.width) / 2, 20 + ts.height}, size, 2);
 }
 
-void draw_axes(cv::Mat &canvas, cv::Mat &plot, const View &v)
+void draw_axes(cv::Mat &canvas, const cv::Rect &rect, const View &v, const std::string &xl,
+	       const std::string &zl)
 {
-	double step = nice_step(TICK_TARGET_PX / v.scale);
-	draw_x_ticks(canvas, plot, v, step);
-	draw_z_ticks(canvas, plot, v, step);
-	cv::rectangle(canvas, PLOT_RECT, BLACK, 1);
-	draw_axis_labels(canvas);
+	cv::Mat plot = canvas(rect);
+	draw_x_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sx));
+	draw_z_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sz));
+	cv::rectangle(canvas, rect, BLACK, 1);
+	draw_axis_labels(canvas, rect, xl, zl);
 }
 
 /* Carries the dash phase across segments so the pattern runs evenly along the whole path. */
@@ -252,12 +258,17 @@ bool heading_dir(const double R[9], cv::Point2d &dir)
 	return true;
 }
 
+void point_marker(cv::Mat &img, cv::Point2d p, const cv::Scalar &color)
+{
+	cv::circle(img, fixed(p), 5 * (int)SUBPIX, color, cv::FILLED, cv::LINE_AA, SHIFT);
+}
+
 void arrow(cv::Mat &img, cv::Point2d from, cv::Point2d to)
 {
 	cv::arrowedLine(img, fixed(from), fixed(to), HEADING_COLOR, 2, cv::LINE_AA, SHIFT, 0.3);
 }
 
-enum class Glyph { LINE, DASHED, START, END, ARROW };
+enum class Glyph { LINE, DASHED, START, END, ARROW, POINT };
 
 struct LegendEntry {
 	std::string label;
@@ -285,6 +296,9 @@ void draw_glyph(cv::Mat &img, const LegendEntry &e, cv::Point2d c)
 	case Glyph::ARROW:
 		arrow(img, c - half, c + half);
 		break;
+	case Glyph::POINT:
+		point_marker(img, c, e.color);
+		break;
 	}
 }
 
@@ -299,17 +313,19 @@ int segments_under(const cv::Rect &r, const std::vector<cv::Point2d> &pts)
 	return n;
 }
 
-cv::Rect legend_rect(cv::Size size, const std::vector<cv::Point2d> &est,
-		     const std::vector<cv::Point2d> &gt)
+using Drawn = std::vector<std::vector<cv::Point2d>>;
+
+cv::Rect legend_rect(cv::Size area, cv::Size size, const Drawn &paths)
 {
-	const int m = 10, right = PLOT_RECT.width - m - size.width,
-		  bottom = PLOT_RECT.height - m - size.height;
+	const int m = 10, right = area.width - m - size.width, bottom = area.height - m - size.height;
 	const cv::Point corners[] = {{right, m}, {m, m}, {right, bottom}, {m, bottom}};
 	cv::Rect best;
 	int best_hits = -1;
 	for (const cv::Point &c : corners) {
 		cv::Rect r(c, size);
-		int hits = segments_under(r, est) + segments_under(r, gt);
+		int hits = 0;
+		for (const auto &p : paths)
+			hits += segments_under(r, p);
 		if (best_hits < 0 || hits < best_hits) {
 			best = r;
 			best_hits = hits;
@@ -318,15 +334,14 @@ cv::Rect legend_rect(cv::Size size, const std::vector<cv::Point2d> &est,
 	return best;
 }
 
-void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries,
-		 const std::vector<cv::Point2d> &est, const std::vector<cv::Point2d> &gt)
+void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries, const Drawn &paths)
 {
 	const int row_h = 26, glyph_w = 40, pad = 10;
 	int text_w = 0;
 	for (const LegendEntry &e : entries)
 		text_w = std::max(text_w, text_size(e.label, 0.55).width);
 	cv::Size size(pad + glyph_w + 8 + text_w + pad, 2 * pad + row_h * (int)entries.size() - 6);
-	cv::Rect r = legend_rect(size, est, gt);
+	cv::Rect r = legend_rect(plot.size(), size, paths);
 
 	cv::rectangle(plot, r, WHITE, cv::FILLED);
 	cv::rectangle(plot, r, NEUTRAL, 1);
@@ -379,11 +394,11 @@ cv::Mat render(const char *title, const Path &est, const double *heading, const 
 	std::vector<cv::Point2d> est_px = project(v, est), gt_px = project(v, gt);
 	std::vector<LegendEntry> legend;
 
-	draw_axes(canvas, plot, v);
+	draw_axes(canvas, PLOT_RECT, v, "x [m]", "z [m]");
 	draw_paths(plot, est_px, gt_px, heading, legend);
 	if (est_px.empty() && gt_px.empty())
 		draw_no_data(plot);
-	draw_legend(plot, legend, est_px, gt_px);
+	draw_legend(plot, legend, {est_px, gt_px});
 	if (title)
 		draw_title(canvas, title);
 	return canvas;
@@ -397,17 +412,141 @@ std::string extension_of(const std::string &path)
 	return dot == std::string::npos || dot <= base ? std::string() : path.substr(dot);
 }
 
+bool can_write(const char *path)
+{
+	return !extension_of(path).empty() && cv::haveImageWriter(path);
+}
+
+/* Encoded before any file exists, so an encoder error leaves nothing behind. */
+int write_image(const char *path, const cv::Mat &img)
+{
+	std::vector<uchar> buf;
+	if (!cv::imencode(extension_of(path), img, buf))
+		return -EIO;
+	return mvod_write_replace(path, buf.data(), buf.size());
+}
+
 int plot_topdown(const char *path, const char *title, const Path &est, const double *heading,
 		 const Path &gt)
 {
-	std::string ext = extension_of(path);
-	if (ext.empty() || !cv::haveImageWriter(path))
+	if (!can_write(path))
 		return -EINVAL;
-	/* Encoded before any file exists, so an encoder error leaves nothing behind. */
-	std::vector<uchar> png;
-	if (!cv::imencode(ext, render(title, est, heading, gt), png))
-		return -EIO;
-	return mvod_write_replace(path, png.data(), png.size());
+	return write_image(path, render(title, est, heading, gt));
+}
+
+/* --- charts: panels of x-y series --- */
+
+const cv::Scalar PALETTE[] = {EST_COLOR, GT_COLOR, cv::Scalar(40, 40, 200), START_COLOR,
+			      cv::Scalar(0, 140, 230)};
+const int CHART_LEFT = 90, CHART_RIGHT = 30, CHART_TOP = 60, CHART_BOTTOM = 70, CHART_GAP = 10;
+
+cv::Scalar series_color(int i)
+{
+	return PALETTE[i % (int)(sizeof(PALETTE) / sizeof(PALETTE[0]))];
+}
+
+bool finite_at(const mvod_plot_series &s, int i)
+{
+	return std::isfinite(s.x[i]) && std::isfinite(s.y[i]);
+}
+
+/* Axes that hold every finite point, y from 0 when nothing is negative, with a margin. */
+View fit_chart(const mvod_plot_panel &p, cv::Size area)
+{
+	cv::Point2d lo(HUGE_VAL, HUGE_VAL), hi(-HUGE_VAL, -HUGE_VAL);
+	for (int k = 0; k < p.n_series; k++)
+		for (int i = 0; i < p.series[k].n; i++)
+			if (finite_at(p.series[k], i)) {
+				lo = {std::min(lo.x, p.series[k].x[i]), std::min(lo.y, p.series[k].y[i])};
+				hi = {std::max(hi.x, p.series[k].x[i]), std::max(hi.y, p.series[k].y[i])};
+			}
+	if (lo.x > hi.x)
+		lo = hi = cv::Point2d(0, 0);
+	if (lo.y > 0)
+		lo.y = 0;
+	/* Flat data still gets a unit range. */
+	double span_x = hi.x > lo.x ? hi.x - lo.x : 1, span_y = hi.y > lo.y ? hi.y - lo.y : 1;
+	double sx = (area.width - 2 * PAD_PX) / span_x, sy = (area.height - 2 * PAD_PX) / span_y;
+	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, sx, sy, area.width, area.height};
+}
+
+/* A marker's text to its right, or to its left where it would leave the plot. */
+void point_label(cv::Mat &plot, cv::Point2d p, const char *text)
+{
+	cv::Size ts = text_size(text, 0.42);
+	int x = (int)p.x + 8;
+	if (x + ts.width > plot.cols - 4)
+		x = (int)p.x - 8 - ts.width;
+	put_text(plot, text, {x, (int)p.y + ts.height / 2}, 0.42);
+}
+
+std::vector<cv::Point2d> draw_series(cv::Mat &plot, const View &v, const mvod_plot_series &s,
+				     const cv::Scalar &color)
+{
+	std::vector<cv::Point2d> px;
+	for (int i = 0; i < s.n; i++)
+		if (finite_at(s, i))
+			px.push_back(v.px(s.x[i], s.y[i]));
+	if (s.style != MVOD_PLOT_POINTS) {
+		draw_path(plot, px, color, s.style == MVOD_PLOT_DASHED);
+		return px;
+	}
+	for (int i = 0, j = 0; i < s.n; i++) {
+		if (!finite_at(s, i))
+			continue;
+		point_marker(plot, px[(size_t)j], color);
+		if (s.point_labels && s.point_labels[i])
+			point_label(plot, px[(size_t)j], s.point_labels[i]);
+		j++;
+	}
+	return {};
+}
+
+void draw_panel(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
+{
+	View v = fit_chart(p, rect.size());
+	cv::Mat plot = canvas(rect);
+	draw_axes(canvas, rect, v, p.x_label ? p.x_label : "", p.y_label ? p.y_label : "");
+	Drawn drawn;
+	std::vector<LegendEntry> legend;
+	for (int k = 0; k < p.n_series; k++) {
+		const mvod_plot_series &s = p.series[k];
+		drawn.push_back(draw_series(plot, v, s, series_color(k)));
+		Glyph g = s.style == MVOD_PLOT_POINTS	? Glyph::POINT
+			  : s.style == MVOD_PLOT_DASHED ? Glyph::DASHED
+							: Glyph::LINE;
+		legend.push_back({s.label ? s.label : "", g, series_color(k)});
+	}
+	draw_legend(plot, legend, drawn);
+}
+
+cv::Mat render_chart(const char *title, const mvod_plot_panel *panels, int n)
+{
+	/* One panel gets a square-ish area; stacked panels share the height of three. */
+	int panel_h = n == 1 ? 640 : std::max(200, 780 / n);
+	int h = CHART_TOP + n * (panel_h + CHART_BOTTOM + CHART_GAP);
+	cv::Mat canvas(h, CANVAS_W, CV_8UC3, WHITE);
+	for (int i = 0; i < n; i++) {
+		cv::Rect r(CHART_LEFT, CHART_TOP + i * (panel_h + CHART_BOTTOM + CHART_GAP),
+			   CANVAS_W - CHART_LEFT - CHART_RIGHT, panel_h);
+		draw_panel(canvas, r, panels[i]);
+	}
+	if (title)
+		draw_title(canvas, title);
+	return canvas;
+}
+
+bool valid_panels(const mvod_plot_panel *panels, int n)
+{
+	if (!panels || n < 1 || n > 8)
+		return false;
+	for (int i = 0; i < n; i++)
+		for (int k = 0; k < panels[i].n_series; k++) {
+			const mvod_plot_series &s = panels[i].series[k];
+			if (s.n < 0 || (s.n > 0 && (!s.x || !s.y)))
+				return false;
+		}
+	return true;
 }
 
 } // namespace
@@ -419,4 +558,16 @@ extern "C" int mvod_plot_topdown(const char *path, const char *title, const doub
 		return -EINVAL;
 	return mvod_guarded(
 		[&] { return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}); });
+}
+
+extern "C" int mvod_plot_chart(const char *path, const char *title,
+			       const struct mvod_plot_panel *panels, int n_panels)
+{
+	if (!path || !valid_panels(panels, n_panels))
+		return -EINVAL;
+	return mvod_guarded([&] {
+		if (!can_write(path))
+			return -EINVAL;
+		return write_image(path, render_chart(title, panels, n_panels));
+	});
 }
