@@ -98,6 +98,125 @@ struct row {
 	char f[NCOLS][40];
 };
 
+/* --- the sweep grid --- */
+
+#define MAX_AXES 8
+#define MAX_CONFIGS 512
+
+/* Grid keys: the run options they set. */
+static const struct {
+	const char *key;
+	int id;
+} grid_keys[] = {
+	{"detector", CLI_OPT_DETECTOR}, {"matcher", CLI_OPT_MATCHER}, {"features", CLI_OPT_FEATURES},
+	{"ratio", CLI_OPT_RATIO},       {"best", CLI_OPT_BEST},       {"resize", CLI_OPT_RESIZE},
+	{"blur", CLI_OPT_BLUR},
+};
+#define GRID_KEYS ((int)(sizeof(grid_keys) / sizeof(grid_keys[0])))
+
+/* One axis of a sub-grid: an option and its values (pointers into the grid's copy). */
+struct axis {
+	const char *key;
+	char *values[64];
+	int n;
+};
+
+/* A configuration: "--key" "value" pairs appended to the child's command line. */
+struct config {
+	int n;
+	char args[2 * MAX_AXES][48];
+};
+
+struct sweep {
+	struct config cfg[MAX_CONFIGS];
+	int n;
+};
+
+static int grid_error(const char *what, const char *text)
+{
+	fprintf(stderr, "%s: --sweep: %s '%s'; see %s --help\n", cli_prog, what, text, cli_prog);
+	return -EINVAL;
+}
+
+/* Checks key=value with the very parser the option uses, so a typo fails before any run. */
+static int check_value(const char *key, const char *value)
+{
+	for (int k = 0; k < GRID_KEYS; k++) {
+		if (strcmp(key, grid_keys[k].key) != 0)
+			continue;
+		struct mvod_run_opts scratch;
+		int quiet = 0;
+		mvod_run_opts_default(&scratch);
+		return cli_parse_shared(grid_keys[k].id, value, &scratch, &quiet);
+	}
+	return grid_error("unknown key (detector, matcher, features, ratio, best, resize, blur)",
+			  key);
+}
+
+static int parse_axis(char *text, struct axis *a)
+{
+	char *eq = strchr(text, '=');
+	if (!eq || eq == text || !eq[1])
+		return grid_error("expected key=value[,value...], found", text);
+	*eq = '\0';
+	a->key = text;
+	a->n = 0;
+	for (char *save, *v = strtok_r(eq + 1, ",", &save); v; v = strtok_r(NULL, ",", &save)) {
+		if (a->n == 64 || check_value(a->key, v))
+			return a->n == 64 ? grid_error("more than 64 values for", a->key) : -EINVAL;
+		a->values[a->n++] = v;
+	}
+	return a->n ? 0 : grid_error("no values for", a->key);
+}
+
+/* Appends the cross product of the axes to the sweep. */
+static int expand(const struct axis *ax, int n_ax, struct sweep *sw)
+{
+	int idx[MAX_AXES] = {0};
+	for (;;) {
+		if (sw->n == MAX_CONFIGS)
+			return grid_error("more than 512 configurations in", "GRID");
+		struct config *c = &sw->cfg[sw->n++];
+		c->n = 0;
+		for (int k = 0; k < n_ax; k++) {
+			snprintf(c->args[c->n++], sizeof(c->args[0]), "--%s", ax[k].key);
+			snprintf(c->args[c->n++], sizeof(c->args[0]), "%s", ax[k].values[idx[k]]);
+		}
+		int k = n_ax - 1;
+		while (k >= 0 && ++idx[k] == ax[k].n)
+			idx[k--] = 0;
+		if (k < 0)
+			return 0;
+	}
+}
+
+static int parse_subgrid(char *text, struct sweep *sw)
+{
+	struct axis ax[MAX_AXES];
+	int n = 0;
+	for (char *save, *a = strtok_r(text, ";", &save); a; a = strtok_r(NULL, ";", &save)) {
+		if (n == MAX_AXES)
+			return grid_error("more than 8 axes in", text);
+		if (parse_axis(a, &ax[n++]))
+			return -EINVAL;
+	}
+	return n ? expand(ax, n, sw) : grid_error("empty grid in", "GRID");
+}
+
+/* grid_copy: writable copy of the grid; the configurations point into it until expanded. */
+static int parse_grid(char *grid_copy, struct sweep *sw)
+{
+	sw->n = 0;
+	char *save;
+	for (char *g = strtok_r(grid_copy, "|", &save); g; g = strtok_r(NULL, "|", &save)) {
+		/* Each sub-grid has its own strtok_r state; the outer one is kept in save. */
+		int ret = parse_subgrid(g, sw);
+		if (ret)
+			return ret;
+	}
+	return sw->n ? 0 : grid_error("empty grid", "");
+}
+
 struct bench {
 	struct mvod_run_opts run;
 	const char *report, *csv, *plots, *grid;
@@ -105,6 +224,8 @@ struct bench {
 	int argc;
 	char **argv;    /* normalised: --sweep GRID as --sweep=GRID */
 	bool *own_arg;  /* argv[i] belongs to a bench option, which no sweep child gets */
+	char *grid_copy;  /* the grid, cut up by parse_grid */
+	struct sweep *sw; /* with --sweep: the configurations */
 };
 
 enum bench_opt_id { OPT_SWEEP = CLI_OPT_OWN, OPT_REPORT, OPT_CSV, OPT_PLOTS };
@@ -155,6 +276,8 @@ static int normalise_argv(struct bench *b, int argc, char **argv)
 
 static void bench_free(struct bench *b)
 {
+	free(b->grid_copy);
+	free(b->sw);
 	for (int i = 0; b->argv && i < b->argc; i++)
 		free(b->argv[i]);
 	free(b->argv);
@@ -177,7 +300,11 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 		return -EINVAL;
 	}
 	b->run.require_gt = 1;
-	return 0;
+	if (!b->grid)
+		return 0;
+	b->grid_copy = strdup(b->grid);
+	b->sw = calloc(1, sizeof(*b->sw));
+	return b->grid_copy && b->sw ? parse_grid(b->grid_copy, b->sw) : -ENOMEM;
 }
 
 /* --- one configuration --- */
@@ -516,123 +643,6 @@ static int bench_one(const struct bench *b)
 
 /* --- the sweep --- */
 
-#define MAX_AXES 8
-#define MAX_CONFIGS 512
-
-/* Grid keys: the run options they set. */
-static const struct {
-	const char *key;
-	int id;
-} grid_keys[] = {
-	{"detector", CLI_OPT_DETECTOR}, {"matcher", CLI_OPT_MATCHER}, {"features", CLI_OPT_FEATURES},
-	{"ratio", CLI_OPT_RATIO},       {"best", CLI_OPT_BEST},       {"resize", CLI_OPT_RESIZE},
-	{"blur", CLI_OPT_BLUR},
-};
-#define GRID_KEYS ((int)(sizeof(grid_keys) / sizeof(grid_keys[0])))
-
-/* One axis of a sub-grid: an option and its values (pointers into the grid's copy). */
-struct axis {
-	const char *key;
-	char *values[64];
-	int n;
-};
-
-/* A configuration: "--key" "value" pairs appended to the child's command line. */
-struct config {
-	int n;
-	char args[2 * MAX_AXES][48];
-};
-
-struct sweep {
-	struct config cfg[MAX_CONFIGS];
-	int n;
-};
-
-static int grid_error(const char *what, const char *text)
-{
-	fprintf(stderr, "%s: --sweep: %s '%s'; see %s --help\n", cli_prog, what, text, cli_prog);
-	return -EINVAL;
-}
-
-/* Checks key=value with the very parser the option uses, so a typo fails before any run. */
-static int check_value(const char *key, const char *value)
-{
-	for (int k = 0; k < GRID_KEYS; k++) {
-		if (strcmp(key, grid_keys[k].key) != 0)
-			continue;
-		struct mvod_run_opts scratch;
-		int quiet = 0;
-		mvod_run_opts_default(&scratch);
-		return cli_parse_shared(grid_keys[k].id, value, &scratch, &quiet);
-	}
-	return grid_error("unknown key (detector, matcher, features, ratio, best, resize, blur)",
-			  key);
-}
-
-static int parse_axis(char *text, struct axis *a)
-{
-	char *eq = strchr(text, '=');
-	if (!eq || eq == text || !eq[1])
-		return grid_error("expected key=value[,value...], found", text);
-	*eq = '\0';
-	a->key = text;
-	a->n = 0;
-	for (char *save, *v = strtok_r(eq + 1, ",", &save); v; v = strtok_r(NULL, ",", &save)) {
-		if (a->n == 64 || check_value(a->key, v))
-			return a->n == 64 ? grid_error("more than 64 values for", a->key) : -EINVAL;
-		a->values[a->n++] = v;
-	}
-	return a->n ? 0 : grid_error("no values for", a->key);
-}
-
-/* Appends the cross product of the axes to the sweep. */
-static int expand(const struct axis *ax, int n_ax, struct sweep *sw)
-{
-	int idx[MAX_AXES] = {0};
-	for (;;) {
-		if (sw->n == MAX_CONFIGS)
-			return grid_error("more than 512 configurations in", "GRID");
-		struct config *c = &sw->cfg[sw->n++];
-		c->n = 0;
-		for (int k = 0; k < n_ax; k++) {
-			snprintf(c->args[c->n++], sizeof(c->args[0]), "--%s", ax[k].key);
-			snprintf(c->args[c->n++], sizeof(c->args[0]), "%s", ax[k].values[idx[k]]);
-		}
-		int k = n_ax - 1;
-		while (k >= 0 && ++idx[k] == ax[k].n)
-			idx[k--] = 0;
-		if (k < 0)
-			return 0;
-	}
-}
-
-static int parse_subgrid(char *text, struct sweep *sw)
-{
-	struct axis ax[MAX_AXES];
-	int n = 0;
-	for (char *save, *a = strtok_r(text, ";", &save); a; a = strtok_r(NULL, ";", &save)) {
-		if (n == MAX_AXES)
-			return grid_error("more than 8 axes in", text);
-		if (parse_axis(a, &ax[n++]))
-			return -EINVAL;
-	}
-	return n ? expand(ax, n, sw) : grid_error("empty grid in", "GRID");
-}
-
-/* grid_copy: writable copy of the grid; the configurations point into it until expanded. */
-static int parse_grid(char *grid_copy, struct sweep *sw)
-{
-	sw->n = 0;
-	char *save;
-	for (char *g = strtok_r(grid_copy, "|", &save); g; g = strtok_r(NULL, "|", &save)) {
-		/* Each sub-grid has its own strtok_r state; the outer one is kept in save. */
-		int ret = parse_subgrid(g, sw);
-		if (ret)
-			return ret;
-	}
-	return sw->n ? 0 : grid_error("empty grid", "");
-}
-
 /* The child's command line: mvod bench, the shared options, the configuration, --csv tmp. */
 static char **child_argv(const struct bench *b, const struct config *c, const char *csv)
 {
@@ -784,10 +794,9 @@ static int sweep_plot(const struct bench *b, const struct row *rows, int n)
 
 static int bench_sweep(const struct bench *b)
 {
-	char *grid = strdup(b->grid);
-	struct sweep *sw = calloc(1, sizeof(*sw));
-	struct row *rows = sw ? calloc(MAX_CONFIGS, sizeof(*rows)) : NULL;
-	int ret = grid && sw && rows ? parse_grid(grid, sw) : -ENOMEM;
+	const struct sweep *sw = b->sw;
+	struct row *rows = calloc((size_t)sw->n, sizeof(*rows));
+	int ret = rows ? 0 : -ENOMEM;
 	if (ret)
 		goto out;
 	char tmp[] = "/tmp/mvod-bench-XXXXXX";
@@ -810,8 +819,6 @@ static int bench_sweep(const struct bench *b)
 		ret = ret ? ret : pret;
 	}
 out:
-	free(grid);
-	free(sw);
 	free(rows);
 	return ret;
 }
