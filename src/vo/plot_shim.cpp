@@ -199,7 +199,9 @@ void draw_axes(cv::Mat &canvas, const cv::Rect &rect, const View &v, const std::
 {
 	cv::Mat plot = canvas(rect);
 	draw_x_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sx));
-	draw_z_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sz));
+	/* A short chart panel still gets three or more ticks. */
+	double z_px = std::min(TICK_TARGET_PX, rect.height / 5.0);
+	draw_z_ticks(canvas, plot, rect, v, nice_step(z_px / v.sz));
 	cv::rectangle(canvas, rect, BLACK, 1);
 	draw_axis_labels(canvas, rect, xl, zl);
 }
@@ -353,9 +355,8 @@ void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries, const D
 }
 
 /* A run whose every pose failed still gets a plot that says so, not a blank grid. */
-void draw_no_data(cv::Mat &plot)
+void draw_no_data(cv::Mat &plot, const std::string &s)
 {
-	const std::string s = "no valid poses";
 	cv::Size ts = text_size(s, 0.8);
 	put_text(plot, s, {(plot.cols - ts.width) / 2, (plot.rows + ts.height) / 2}, 0.8, 1, NEUTRAL);
 }
@@ -397,7 +398,7 @@ cv::Mat render(const char *title, const Path &est, const double *heading, const 
 	draw_axes(canvas, PLOT_RECT, v, "x [m]", "z [m]");
 	draw_paths(plot, est_px, gt_px, heading, legend);
 	if (est_px.empty() && gt_px.empty())
-		draw_no_data(plot);
+		draw_no_data(plot, "no valid poses");
 	draw_legend(plot, legend, {est_px, gt_px});
 	if (title)
 		draw_title(canvas, title);
@@ -509,6 +510,14 @@ void draw_panel(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
 	draw_axes(canvas, rect, v, p.x_label ? p.x_label : "", p.y_label ? p.y_label : "");
 	Drawn drawn;
 	std::vector<LegendEntry> legend;
+	bool any = false;
+	for (int k = 0; k < p.n_series; k++)
+		for (int i = 0; i < p.series[k].n; i++)
+			any = any || finite_at(p.series[k], i);
+	if (!any) {
+		draw_no_data(plot, "no data");
+		return;
+	}
 	for (int k = 0; k < p.n_series; k++) {
 		const mvod_plot_series &s = p.series[k];
 		drawn.push_back(draw_series(plot, v, s, series_color(k)));
