@@ -103,6 +103,15 @@ static int count_substr(const char *s, const char *needle)
 	return n;
 }
 
+static void read_text(const char *path, char *text, size_t len)
+{
+	FILE *f = fopen(path, "r");
+	assert_non_null(f);
+	size_t n = fread(text, 1, len - 1, f);
+	fclose(f);
+	text[n] = '\0';
+}
+
 static void test_one_configuration(void **state)
 {
 	(void)state;
@@ -134,19 +143,15 @@ static void test_one_configuration(void **state)
 	assert_true(atof(cells[0][column(header, "scale_drift")]) > 0.99);
 	/* The same row on stdout and in the report, as Markdown: header, rule, row. */
 	assert_non_null(strstr(r.out, "| detector | matcher |"));
-	FILE *f = fopen(md, "r");
-	assert_non_null(f);
-	char text[8192] = "";
-	size_t len = fread(text, 1, sizeof(text) - 1, f);
-	fclose(f);
-	text[len] = '\0';
+	char text[8192];
+	read_text(md, text, sizeof(text));
 	assert_int_equal(count_substr(text, "\n"), 3);
 	assert_int_equal(count_substr(text, "| orb | bf |"), 1);
 	const char *pngs[] = {"path-top.png", "path-side.png", "errors.png"};
 	for (int i = 0; i < 3; i++) {
 		char p[400];
 		snprintf(p, sizeof(p), "%s/%s", plots, pngs[i]);
-		f = fopen(p, "rb");
+		FILE *f = fopen(p, "rb");
 		assert_non_null(f);
 		unsigned char sig[8];
 		assert_int_equal(fread(sig, 1, 8, f), 8);
@@ -176,12 +181,8 @@ static void test_sweep_two_configurations(void **state)
 	assert_string_equal(cells[0][f], "500");
 	assert_string_equal(cells[1][f], "500");
 	assert_true(atof(cells[0][e]) <= atof(cells[1][e]));
-	FILE *fp = fopen(md, "r");
-	assert_non_null(fp);
-	char text[8192] = "";
-	size_t len = fread(text, 1, sizeof(text) - 1, fp);
-	fclose(fp);
-	text[len] = '\0';
+	char text[8192];
+	read_text(md, text, sizeof(text));
 	assert_int_equal(count_substr(text, "| orb | bf-"), 2);
 	assert_non_null(strstr(r.out, "| orb | bf-cross best 200 |"));
 	/* Each run was a process of its own, and said so. */
