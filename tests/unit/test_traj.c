@@ -86,7 +86,21 @@ static void test_load_errors(void **state)
 	fputs("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0\n", f);
 	fclose(f);
 	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
+	/* The line, what the first line made it expect, and what it found instead. */
+	assert_non_null(strstr(err, "bad.txt:2: expected 12 numbers (KITTI"));
+	assert_non_null(strstr(err, "found 8"));
+	f = fopen(path, "w");
+	fputs("0.1 0 0 0 0 0 0 1\n0.2 0 0 0 0 0 one 1\n", f);
+	fclose(f);
+	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "bad.txt:2: expected 8 numbers (TUM"));
+	assert_non_null(strstr(err, "found text"));
+	f = fopen(path, "w");
+	fputs("0.1 0 0 0 0 0 0 1\n0.2 0 0 nan 0 0 0 1\n", f);
+	fclose(f);
+	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
 	assert_non_null(strstr(err, "bad.txt:2"));
+	assert_non_null(strstr(err, "found nan or inf"));
 	f = fopen(path, "w");
 	fputs("# only a comment\n\n", f);
 	fclose(f);
