@@ -2,6 +2,8 @@
 #ifndef MVOD_PLOT_H
 #define MVOD_PLOT_H
 
+#include <stdbool.h>
+
 #include "mvod/geom.h"
 
 #ifdef __cplusplus
@@ -21,7 +23,7 @@ int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz
 enum mvod_plot_style {
 	MVOD_PLOT_LINE = 0,
 	MVOD_PLOT_DASHED = 1,
-	MVOD_PLOT_POINTS = 2, /* markers, each with its point_labels text when given */
+	MVOD_PLOT_POINTS = 2, /* markers; with point_labels numbered, and named in a key beside */
 };
 
 /* One data series; borrowed for the call. Non-finite values are left out. */
@@ -38,6 +40,7 @@ struct mvod_plot_panel {
 	const char *x_label, *y_label;
 	const struct mvod_plot_series *series;
 	int n_series;
+	bool log_x; /* logarithmic x axis; points with x <= 0 are left out */
 };
 
 /*

@@ -526,7 +526,7 @@ static int plot_side(const char *path, const char *title, const double *pe, cons
 		{"estimate", s, ey, n, MVOD_PLOT_LINE, NULL},
 		{"ground truth", s, gy, n, MVOD_PLOT_DASHED, NULL},
 	};
-	struct mvod_plot_panel p = {"distance along the ground truth [m]", "height, -y [m]", ser, 2};
+	struct mvod_plot_panel p = {"distance along the ground truth [m]", "height, -y [m]", ser, 2, false};
 	int ret = mvod_plot_chart(path, title, &p, 1);
 	free(buf);
 	return ret;
@@ -556,7 +556,9 @@ static int plot_errors(const char *path, const char *title, const struct collect
 		{"d: step error", x, d, n, MVOD_PLOT_LINE, NULL},
 	};
 	struct mvod_plot_panel p[3] = {
-		{"frame", "e", &s[0], 1}, {"frame", "r [deg]", &s[1], 1}, {"frame", "d [m]", &s[2], 1},
+		{"frame", "e", &s[0], 1, false},
+		{"frame", "r [deg]", &s[1], 1, false},
+		{"frame", "d [m]", &s[2], 1, false},
 	};
 	int ret = mvod_plot_chart(path, title, p, 3);
 	free(buf);
@@ -780,7 +782,7 @@ static int sweep_plot(const struct bench *b, const struct row *rows, int n)
 		}
 		struct mvod_plot_series s = {"configuration", x, y, n, MVOD_PLOT_POINTS,
 					     (const char *const *)labels};
-		struct mvod_plot_panel p = {"median frame time [ms]", "err_avg", &s, 1};
+		struct mvod_plot_panel p = {"median frame time [ms], log scale", "err_avg", &s, 1, true};
 		char path[4096];
 		snprintf(path, sizeof(path), "%s/sweep.png", b->plots);
 		ret = plot_failed(path, mvod_plot_chart(path, "mvod bench: error against speed", &p,

@@ -140,18 +140,36 @@ cv::Size text_size(const std::string &s, double size, int thick = 1)
 	return cv::getTextSize(s, FONT, size, thick, &baseline);
 }
 
-/* rect: where the plot area sits on the canvas. */
+/* A grid line at plot column u and its label under the plot; rect: the plot on the canvas. */
+void x_tick(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, int u, const std::string &s)
+{
+	cv::line(plot, {u, 0}, {u, rect.height}, GRID, 1);
+	cv::Size ts = text_size(s, 0.5);
+	put_text(canvas, s, {rect.x + u - ts.width / 2, rect.br().y + 22}, 0.5);
+}
+
 void draw_x_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
 		  double step)
 {
 	for (long k = std::lround(std::ceil(v.x_at(0) / step)); k * step <= v.x_at(rect.width);
-	     k++) {
-		int u = (int)std::lround(v.px(k * step, 0).x);
-		cv::line(plot, {u, 0}, {u, rect.height}, GRID, 1);
-		std::string s = tick_label(k * step, step);
-		cv::Size ts = text_size(s, 0.5);
-		put_text(canvas, s, {rect.x + u - ts.width / 2, rect.br().y + 22}, 0.5);
-	}
+	     k++)
+		x_tick(canvas, plot, rect, (int)std::lround(v.px(k * step, 0).x),
+		       tick_label(k * step, step));
+}
+
+/* A logarithmic x axis (the view holds log10 x): ticks at 1, 2 and 5 times powers of ten. */
+void draw_x_log_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v)
+{
+	double lo = v.x_at(0), hi = v.x_at(rect.width);
+	for (int k = (int)std::floor(lo); k <= (int)std::ceil(hi); k++)
+		for (double m : {1.0, 2.0, 5.0}) {
+			double lx = std::log10(m) + k;
+			if (lx < lo || lx > hi)
+				continue;
+			char buf[32];
+			std::snprintf(buf, sizeof(buf), "%g", m * std::pow(10.0, k));
+			x_tick(canvas, plot, rect, (int)std::lround(v.px(lx, 0).x), buf);
+		}
 }
 
 void draw_z_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
@@ -195,10 +213,13 @@ void draw_title(cv::Mat &canvas, const char *title)
 }
 
 void draw_axes(cv::Mat &canvas, const cv::Rect &rect, const View &v, const std::string &xl,
-	       const std::string &zl)
+	       const std::string &zl, bool log_x = false)
 {
 	cv::Mat plot = canvas(rect);
-	draw_x_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sx));
+	if (log_x)
+		draw_x_log_ticks(canvas, plot, rect, v);
+	else
+		draw_x_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sx));
 	/* A short chart panel still gets three or more ticks. */
 	double z_px = std::min(TICK_TARGET_PX, rect.height / 5.0);
 	draw_z_ticks(canvas, plot, rect, v, nice_step(z_px / v.sz));
@@ -446,9 +467,16 @@ cv::Scalar series_color(int i)
 	return PALETTE[i % (int)(sizeof(PALETTE) / sizeof(PALETTE[0]))];
 }
 
-bool finite_at(const mvod_plot_series &s, int i)
+/* The x a panel draws: log10 x on a logarithmic axis. */
+double chart_x(const mvod_plot_panel &p, double x)
 {
-	return std::isfinite(s.x[i]) && std::isfinite(s.y[i]);
+	return p.log_x ? std::log10(x) : x;
+}
+
+/* A point that can be drawn: finite, and x > 0 on a logarithmic axis. */
+bool finite_at(const mvod_plot_panel &p, const mvod_plot_series &s, int i)
+{
+	return std::isfinite(chart_x(p, s.x[i])) && std::isfinite(s.y[i]);
 }
 
 /* Axes that hold every finite point, y from 0 when nothing is negative, with a margin. */
@@ -457,9 +485,10 @@ View fit_chart(const mvod_plot_panel &p, cv::Size area)
 	cv::Point2d lo(HUGE_VAL, HUGE_VAL), hi(-HUGE_VAL, -HUGE_VAL);
 	for (int k = 0; k < p.n_series; k++)
 		for (int i = 0; i < p.series[k].n; i++)
-			if (finite_at(p.series[k], i)) {
-				lo = {std::min(lo.x, p.series[k].x[i]), std::min(lo.y, p.series[k].y[i])};
-				hi = {std::max(hi.x, p.series[k].x[i]), std::max(hi.y, p.series[k].y[i])};
+			if (finite_at(p, p.series[k], i)) {
+				double x = chart_x(p, p.series[k].x[i]), y = p.series[k].y[i];
+				lo = {std::min(lo.x, x), std::min(lo.y, y)};
+				hi = {std::max(hi.x, x), std::max(hi.y, y)};
 			}
 	if (lo.x > hi.x)
 		lo = hi = cv::Point2d(0, 0);
@@ -471,56 +500,103 @@ View fit_chart(const mvod_plot_panel &p, cv::Size area)
 	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, sx, sy, area.width, area.height};
 }
 
-/* A marker's text to its right, or to its left where it would leave the plot. */
-void point_label(cv::Mat &plot, cv::Point2d p, const char *text)
+/*
+ * Labelled points are numbered on the plot and named in a key beside it: the number goes in
+ * the first of eight places around its marker that overlaps no marker or number yet drawn.
+ */
+void place_number(cv::Mat &plot, cv::Point2d p, const std::string &num,
+		  std::vector<cv::Rect> &taken)
 {
-	cv::Size ts = text_size(text, 0.42);
-	int x = (int)p.x + 8;
-	if (x + ts.width > plot.cols - 4)
-		x = (int)p.x - 8 - ts.width;
-	put_text(plot, text, {x, (int)p.y + ts.height / 2}, 0.42);
+	cv::Size ts = text_size(num, 0.45);
+	const double w = ts.width, h = ts.height;
+	const cv::Point2d offs[] = {{7, -7},	     {7, 7 + h},	{-7 - w, -7},
+				    {-7 - w, 7 + h}, {-w / 2, -9},	{-w / 2, 9 + h},
+				    {14, h / 2},     {-14 - w, h / 2}};
+	cv::Rect inside(0, 0, plot.cols, plot.rows), best;
+	for (const cv::Point2d &o : offs) {
+		cv::Rect r((int)(p.x + o.x), (int)(p.y + o.y) - ts.height, ts.width, ts.height);
+		bool free = (r & inside) == r;
+		for (const cv::Rect &t : taken)
+			free = free && (r & t).empty();
+		if (free || best.empty())
+			best = r;
+		if (free)
+			break;
+	}
+	taken.push_back(best);
+	put_text(plot, num, {best.x, best.br().y}, 0.45);
 }
 
-std::vector<cv::Point2d> draw_series(cv::Mat &plot, const View &v, const mvod_plot_series &s,
-				     const cv::Scalar &color)
+std::vector<cv::Point2d> draw_series(cv::Mat &plot, const View &v, const mvod_plot_panel &p,
+				     const mvod_plot_series &s, const cv::Scalar &color)
 {
 	std::vector<cv::Point2d> px;
+	std::vector<int> index;
 	for (int i = 0; i < s.n; i++)
-		if (finite_at(s, i))
-			px.push_back(v.px(s.x[i], s.y[i]));
+		if (finite_at(p, s, i)) {
+			px.push_back(v.px(chart_x(p, s.x[i]), s.y[i]));
+			index.push_back(i);
+		}
 	if (s.style != MVOD_PLOT_POINTS) {
 		draw_path(plot, px, color, s.style == MVOD_PLOT_DASHED);
 		return px;
 	}
-	for (int i = 0, j = 0; i < s.n; i++) {
-		if (!finite_at(s, i))
-			continue;
-		point_marker(plot, px[(size_t)j], color);
-		if (s.point_labels && s.point_labels[i])
-			point_label(plot, px[(size_t)j], s.point_labels[i]);
-		j++;
+	std::vector<cv::Rect> taken;
+	for (const cv::Point2d &q : px) {
+		point_marker(plot, q, color);
+		taken.emplace_back((int)q.x - 5, (int)q.y - 5, 11, 11);
 	}
+	for (size_t j = 0; s.point_labels && j < px.size(); j++)
+		place_number(plot, px[j], std::to_string(index[j] + 1), taken);
 	return {};
+}
+
+const int KEY_W = 300; /* room right of a panel for the key of numbered points */
+
+bool has_key(const mvod_plot_panel &p)
+{
+	for (int k = 0; k < p.n_series; k++)
+		if (p.series[k].style == MVOD_PLOT_POINTS && p.series[k].point_labels)
+			return true;
+	return false;
+}
+
+/* "N  label" for every labelled point, top down beside the plot. */
+void draw_key(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
+{
+	int y = rect.y + 14;
+	for (int k = 0; k < p.n_series; k++)
+		for (int i = 0; p.series[k].point_labels && i < p.series[k].n; i++) {
+			std::string line = std::to_string(i + 1) + "  " +
+					   (p.series[k].point_labels[i] ? p.series[k].point_labels[i] : "");
+			if (!finite_at(p, p.series[k], i))
+				line += " (not drawn)";
+			put_text(canvas, line, {rect.br().x + 12, y}, 0.42);
+			y += 18;
+		}
 }
 
 void draw_panel(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
 {
 	View v = fit_chart(p, rect.size());
 	cv::Mat plot = canvas(rect);
-	draw_axes(canvas, rect, v, p.x_label ? p.x_label : "", p.y_label ? p.y_label : "");
+	draw_axes(canvas, rect, v, p.x_label ? p.x_label : "", p.y_label ? p.y_label : "",
+		  p.log_x);
+	if (has_key(p))
+		draw_key(canvas, rect, p);
 	Drawn drawn;
 	std::vector<LegendEntry> legend;
 	bool any = false;
 	for (int k = 0; k < p.n_series; k++)
 		for (int i = 0; i < p.series[k].n; i++)
-			any = any || finite_at(p.series[k], i);
+			any = any || finite_at(p, p.series[k], i);
 	if (!any) {
 		draw_no_data(plot, "no data");
 		return;
 	}
 	for (int k = 0; k < p.n_series; k++) {
 		const mvod_plot_series &s = p.series[k];
-		drawn.push_back(draw_series(plot, v, s, series_color(k)));
+		drawn.push_back(draw_series(plot, v, p, s, series_color(k)));
 		Glyph g = s.style == MVOD_PLOT_POINTS	? Glyph::POINT
 			  : s.style == MVOD_PLOT_DASHED ? Glyph::DASHED
 							: Glyph::LINE;
@@ -536,8 +612,9 @@ cv::Mat render_chart(const char *title, const mvod_plot_panel *panels, int n)
 	int h = CHART_TOP + n * (panel_h + CHART_BOTTOM + CHART_GAP);
 	cv::Mat canvas(h, CANVAS_W, CV_8UC3, WHITE);
 	for (int i = 0; i < n; i++) {
+		int key = has_key(panels[i]) ? KEY_W : 0;
 		cv::Rect r(CHART_LEFT, CHART_TOP + i * (panel_h + CHART_BOTTOM + CHART_GAP),
-			   CANVAS_W - CHART_LEFT - CHART_RIGHT, panel_h);
+			   CANVAS_W - CHART_LEFT - CHART_RIGHT - key, panel_h);
 		draw_panel(canvas, r, panels[i]);
 	}
 	if (title)

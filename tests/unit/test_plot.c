@@ -273,11 +273,13 @@ static void test_chart_panels(void **state)
 		{"sin", x, y, 50, MVOD_PLOT_LINE, NULL},
 		{"square", x, y2, 50, MVOD_PLOT_DASHED, NULL},
 	};
-	struct mvod_plot_panel one = {"frame", "value [m]", two, 2};
+	struct mvod_plot_panel one = {"frame", "value [m]", two, 2, false};
 	assert_int_equal(mvod_plot_chart(path, "one panel", &one, 1), 0);
 	assert_png(path, PLOT_W, chart_height(1));
 	struct mvod_plot_panel three[3] = {
-		{"frame", "a", &two[0], 1}, {"frame", "b", &two[1], 1}, {"frame", "empty", NULL, 0}};
+		{"frame", "a", &two[0], 1, false},
+		{"frame", "b", &two[1], 1, false},
+		{"frame", "empty", NULL, 0, false}};
 	join(path, sizeof(path), t->dir, "chart3.png");
 	assert_int_equal(mvod_plot_chart(path, "three panels", three, 3), 0);
 	assert_png(path, PLOT_W, chart_height(3));
@@ -290,14 +292,14 @@ static void test_chart_labelled_points(void **state)
 	const double x[3] = {12, 40, 130}, y[3] = {0.2, 0.15, 0.09};
 	const char *const labels[3] = {"orb bf-cross 1000", "orb bf 2000", "sift flann-ratio 3000"};
 	struct mvod_plot_series s = {"configuration", x, y, 3, MVOD_PLOT_POINTS, labels};
-	struct mvod_plot_panel p = {"median frame time [ms]", "err_avg", &s, 1};
+	struct mvod_plot_panel p = {"median frame time [ms], log scale", "err_avg", &s, 1, true};
 	char path[128];
 	join(path, sizeof(path), t->dir, "points.png");
 	assert_int_equal(mvod_plot_chart(path, "error against speed", &p, 1), 0);
 	assert_png(path, PLOT_W, chart_height(1));
 	/* Bad arguments write nothing. */
 	struct mvod_plot_series bad = {"x", NULL, y, 3, MVOD_PLOT_LINE, NULL};
-	struct mvod_plot_panel bp = {"x", "y", &bad, 1};
+	struct mvod_plot_panel bp = {"x", "y", &bad, 1, false};
 	join(path, sizeof(path), t->dir, "bad.png");
 	assert_int_equal(mvod_plot_chart(path, "t", &bp, 1), -EINVAL);
 	assert_int_equal(mvod_plot_chart(path, "t", &p, 0), -EINVAL);
