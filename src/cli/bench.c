@@ -419,7 +419,8 @@ static void fill_row(const struct mvod_run_opts *o, const struct mvod_run_summar
 	cell(r, C_RPE_PCT, "%.1f", w->rpe.n_pct ? w->rpe.trans_pct_mean : NAN);
 	cell(r, C_ATE_M, "%.3f", s->ate_rmse_m);
 	cell(r, C_ATE_PCT, "%.2f", 100 * s->ate_rmse_m / s->path_len_m);
-	cell(r, C_DRIFT, "%.3f", w->drift);
+	/* A free-scale run can blow its scale up by orders of magnitude: keep the cell short. */
+	cell(r, C_DRIFT, fabs(w->drift) < 1e3 ? "%.3f" : "%.2e", w->drift);
 	cell(r, C_T_REL, "%.2f", w->krel.t_rel_pct);
 	cell(r, C_R_REL, "%.3f", w->krel.r_rel_deg_100m);
 	cell(r, C_FPS, "%.1f", s->fps);
