@@ -24,7 +24,7 @@
  * The default sweep: sub-grids joined by '|', each a cross product. Chosen to cover every
  * detector x matcher with the reference implementation's ratios (ORB 0.7, SIFT 0.6) at two
  * feature caps, mvod's default configuration and its extremes (10 000 ORB, 50 and 6 000
- * SIFT), and image scale and blur on mvod's default: 29 runs, about 8 minutes on the 160-frame
+ * SIFT), and image scale and blur on mvod's default: 29 runs, about 9 minutes on the 160-frame
  * KITTI 07 clip on 2 cores.
  */
 static const char default_grid[] =
@@ -55,7 +55,7 @@ static void usage(FILE *out)
 "                        the other; print them sorted by err_avg. GRID: axes 'key=v1,v2'\n"
 "                        joined by ';' make a cross product; '|' joins cross products. Keys:\n"
 "                        detector, matcher, features, ratio, best, resize, blur. The other\n"
-"                        options apply to every run. Default (29 runs, ~8 min on KITTI 07):\n");
+"                        options apply to every run. Default (29 runs, ~9 min on KITTI 07):\n");
 	for (const char *g = default_grid; *g;) {
 		size_t n = strcspn(g + 1, "|") + 1;
 		fprintf(out, "                          %.*s\n", (int)n, g);
