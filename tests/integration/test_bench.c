@@ -139,6 +139,9 @@ static void test_one_configuration(void **state)
 	 */
 	double err_avg = atof(cells[0][column(header, "err_avg")]);
 	assert_true(err_avg > 0 && err_avg < 0.1);
+	/* The frame-time histogram's quantiles are ordered (values are not asserted: timing). */
+	double median = atof(cells[0][column(header, "frame_ms_median")]);
+	assert_true(median > 0 && median <= atof(cells[0][column(header, "frame_ms_p95")]));
 	/* With --scale gt every step has the true length: no drift, to rounding. */
 	assert_true(atof(cells[0][column(header, "scale_drift")]) > 0.99);
 	/* The same row on stdout and in the report, as Markdown: header, rule, row. */
