@@ -1,43 +1,73 @@
 #!/usr/bin/env bash
-# Reproduces the numbers in BENCHMARKS.md: the KITTI clips in ../shared/data (when present) and
-# a synthetic sequence, each run end to end by the real binary. Timing lives here, never in tests.
+# Reproduces the numbers in BENCHMARKS.md: `mvod bench --sweep` (the default grid, one fresh
+# process per configuration) on the KITTI 06 and 07 clips in ../shared/data, and a long drive
+# along the whole KITTI 00 ground truth rendered by mvod-synth (drift and KITTI t_rel/r_rel).
+# Timing lives here, never in tests.
+#
+# Usage: bench/run.sh [BUILDDIR]. Tables, CSVs and plots go to BUILDDIR/bench-out/; the
+# KITTI 00 render (4541 frames, ~4 min, ~360 MB) is cached in BUILDDIR/bench-cache/ and reused
+# while its mvod-synth command line is unchanged.
 set -euo pipefail
 build=${1:-build}
 root=$(cd "$(dirname "$0")/.." && pwd)
 data=${MVOD_DATA:-$root/../shared/data}
-out=$(mktemp -d /tmp/mvod-bench-XXXXXX)
-trap 'rm -rf "$out"' EXIT
-export LCM_DEFAULT_URL=memq://
+out=$build/bench-out
+cache=$build/bench-cache
+mkdir -p "$out" "$cache"
 
 echo "# mvod bench, $(date -u +%Y-%m-%d)"
-echo "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores; mvod $("$build/mvod" --version)"
+echo "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores," \
+	"$(free -g | awk '/^Mem:/ {print $2}') GiB; $(uname -sr);" \
+	"OpenCV $(pkg-config --modversion opencv4); $(gcc --version | head -1); $("$build/mvod" --version)"
 echo
 
-run() {
+# Runs mvod bench, printing the command and how long it took.
+bench() {
 	local name=$1
 	shift
 	echo "## $name"
-	echo "\$ mvod $*"
-	"$build/mvod" --no-lcm "$@" 2>/dev/null | sed 's/^mvod: /    /'
+	echo "\$ mvod bench $*"
+	local t0=$SECONDS
+	"$build/mvod" bench "$@"
+	echo
+	echo "($((SECONDS - t0)) s)"
 	echo
 }
 
 for seq in 06 07; do
 	dir=$data/kitti-odometry-$seq-clip
-	if [ -d "$dir" ]; then
-		run "KITTI $seq clip, ground-truth scale" --source "kitti:$dir/sequences/$seq" \
-			--gt "$dir/poses/$seq.txt" --scale gt
-	else
+	if [ ! -d "$dir" ]; then
 		echo "## KITTI $seq clip: $dir absent, skipped"
+		continue
 	fi
+	bench "KITTI $seq clip, default sweep, ground-truth scale" \
+		--source "kitti:$dir/sequences/$seq" --gt "$dir/poses/$seq.txt" --scale gt \
+		--sweep --report "$out/kitti-$seq.md" --csv "$out/kitti-$seq.csv" \
+		--plots "$out/kitti-$seq"
 done
 
-"$build/tools/mvod-synth" --path figure8 --frames 300 --out "$out/fig8" >/dev/null
-run "mvod-synth figure8, 300 frames 640x480, free scale" --source "file:$out/fig8/video.mkv" \
-	--calib "$out/fig8/calib.json" --gt "$out/fig8/gt.tum"
-run "mvod-synth figure8, 300 frames 640x480, ground-truth scale" \
-	--source "file:$out/fig8/video.mkv" --calib "$out/fig8/calib.json" --gt "$out/fig8/gt.tum" \
-	--scale gt
+# The whole KITTI 00 path (3.7 km) through a synthetic street, at KITTI's field of view
+# (fx = 707 px at 1226 px wide, so 369 px at 640) and a quarter of its pixels.
+gt00=$data/kitti-groundtruth/00.txt
+synth=$cache/kitti00-640x192
+args=(--path "$gt00" --size 640x192 --fx 369 --format mkv)
+if [ -f "$gt00" ]; then
+	if [ "$(cat "$synth/args" 2>/dev/null)" != "${args[*]}" ]; then
+		echo "## rendering KITTI 00 with mvod-synth ${args[*]} (cached in $synth)"
+		rm -rf "$synth"
+		"$build/tools/mvod-synth" --out "$synth" "${args[@]}"
+		echo "${args[*]}" >"$synth/args"
+		echo
+	fi
+	for scale in auto gt; do
+		bench "mvod-synth along the KITTI 00 ground truth, 4541 frames 640x192, $scale scale" \
+			--source "file:$synth/video.mkv" --calib "$synth/calib.json" \
+			--gt "$synth/gt.tum" --scale $scale --report "$out/kitti00-synth-$scale.md" \
+			--plots "$out/kitti00-synth-$scale"
+	done
+else
+	echo "## KITTI 00 ground truth: $gt00 absent, skipped"
+fi
 
 # Instruction counts repeat exactly where wall time does not: compare these across changes.
 dir=$data/kitti-odometry-06-clip

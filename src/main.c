@@ -15,6 +15,7 @@ static const struct command commands[] = {
 	{"board", mvod_cmd_board},
 	{"calib-convert", mvod_cmd_convert},
 	{"view", mvod_cmd_view},
+	{"bench", mvod_cmd_bench},
 };
 
 int main(int argc, char **argv)

@@ -20,6 +20,14 @@
 /* How long the live loop waits for a frame before it looks at the stop flag again. */
 #define LIVE_WAIT_MS 100
 
+/*
+ * Frame times go into a fixed histogram of 1 % wide logarithmic bins from 0.01 ms to ~80 s, so
+ * a daemon running for months keeps its median and 95th percentile in constant memory.
+ */
+#define FT_BINS 1600
+#define FT_MIN_MS 0.01
+#define FT_GROWTH 1.01
+
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
 	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM};
@@ -40,6 +48,7 @@ struct run {
 	int have_prev, prev_had_gt; /* a frame has been recorded; it had a ground-truth pose */
 	struct mvod_run_summary *sum;
 	double stage_total[MVOD_STAGE_COUNT];
+	uint32_t frame_hist[FT_BINS];
 	double t_start, last_status;
 	enum mvod_track_state state;
 	struct mvod_frame last_frame;      /* for status messages sent between frames */
@@ -207,16 +216,44 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 	r->status_due = false;
 }
 
-static void record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
-		   const struct mvod_pose *gt)
+static void hist_add(uint32_t *hist, double ms)
+{
+	double b = ms > FT_MIN_MS ? log(ms / FT_MIN_MS) / log(FT_GROWTH) : 0;
+	hist[b < FT_BINS - 1 ? (int)b : FT_BINS - 1]++;
+}
+
+/* The q-quantile of n counted times: the middle of the bin it falls in. */
+static double hist_quantile(const uint32_t *hist, int64_t n, double q)
+{
+	int64_t want = (int64_t)ceil(q * (double)n), seen = 0;
+	for (int b = 0; b < FT_BINS; b++) {
+		seen += hist[b];
+		if (seen >= want && seen > 0)
+			return FT_MIN_MS * pow(FT_GROWTH, b + 0.5);
+	}
+	return 0;
+}
+
+static double record_times(struct run *r, const struct mvod_vo_result *res)
+{
+	struct mvod_run_summary *s = r->sum;
+	double frame_ms = 0;
+	for (int k = 0; k < MVOD_STAGE_COUNT; k++) {
+		r->stage_total[k] += res->ms[k];
+		s->stage_ms_max[k] = fmax(s->stage_ms_max[k], res->ms[k]);
+		frame_ms += res->ms[k];
+	}
+	hist_add(r->frame_hist, frame_ms);
+	return frame_ms;
+}
+
+static int record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
+		  const struct mvod_pose *gt)
 {
 	struct mvod_run_summary *s = r->sum;
 	s->frames++;
 	s->tracked += res->status == MVOD_FRAME_MOTION || res->status == MVOD_FRAME_ROTATION;
-	for (int k = 0; k < MVOD_STAGE_COUNT; k++) {
-		r->stage_total[k] += res->ms[k];
-		s->stage_ms_max[k] = fmax(s->stage_ms_max[k], res->ms[k]);
-	}
+	double frame_ms = record_times(r, res);
 	if (res->state != r->state) {
 		LOG(INFO, "frame %lld: %s -> %s (%s)", (long long)f->index,
 		    mvod_track_state_name(r->state), mvod_track_state_name(res->state),
@@ -239,6 +276,10 @@ static void record(struct run *r, const struct mvod_frame *f, const struct mvod_
 	r->prev_had_gt = gt != NULL;
 	r->prev_est = res->pose;
 	r->have_prev = 1;
+	if (!r->o->on_frame)
+		return 0;
+	struct mvod_frame_report rep = {f->index, &res->pose, gt, frame_ms};
+	return r->o->on_frame(r->o->on_frame_ctx, &rep);
 }
 
 static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
@@ -259,12 +300,28 @@ static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo
 	}
 }
 
+/* Why frame f has no ground-truth pose, for a run that needs one for every frame. */
+static void log_missing_gt(const struct run *r, const struct mvod_frame *f)
+{
+	const char *why = r->o->vo.scale_mode == MVOD_SCALE_MODE_GT ? "--scale gt" : "benchmarking";
+	if (r->gt.format == MVOD_TRAJ_KITTI) {
+		LOG(ERROR, "ground truth %s has %d poses (KITTI, one per frame) but %s has more frames: "
+			   "frame %lld has none, and %s needs every frame; pass --max-frames %d or "
+			   "the ground truth of this sequence",
+		    r->o->gt, r->gt.n, r->o->source, (long long)f->index, why, r->gt.n);
+		return;
+	}
+	LOG(ERROR, "frame %lld (t = %.6f s) has no pose within 5 ms in ground truth %s, whose "
+		   "poses span t = %.6f .. %.6f s: the clocks differ or the file has a gap; %s needs "
+		   "every frame",
+	    (long long)f->index, f->utime / 1e6, r->o->gt, r->gt.t[0], r->gt.t[r->gt.n - 1], why);
+}
+
 static int process_frame(struct run *r, const struct mvod_frame *f, double capture_ms)
 {
 	const struct mvod_pose *gt = gt_for(r, f);
-	if (r->o->vo.scale_mode == MVOD_SCALE_MODE_GT && !gt) {
-		LOG(ERROR, "frame %lld has no ground-truth pose in %s (needed by --scale gt)",
-		    (long long)f->index, r->o->gt);
+	if ((r->o->vo.scale_mode == MVOD_SCALE_MODE_GT || r->o->require_gt) && !gt) {
+		log_missing_gt(r, f);
 		return -ENOENT;
 	}
 	struct mvod_vo_result res;
@@ -274,11 +331,11 @@ static int process_frame(struct run *r, const struct mvod_frame *f, double captu
 		return ret;
 	}
 	res.ms[MVOD_STAGE_CAPTURE] = capture_ms;
-	record(r, f, &res, gt);
+	ret = record(r, f, &res, gt);
 	emit(r, f, &res);
 	r->last_frame = *f;
 	r->last_res = res;
-	return 0;
+	return ret;
 }
 
 static bool stopped(const struct run *r, volatile sig_atomic_t *stop)
@@ -416,6 +473,8 @@ static void summarise(struct run *r)
 	s->held = s->frames - s->tracked;
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		s->stage_ms_mean[k] = s->frames ? r->stage_total[k] / (double)s->frames : 0;
+	s->frame_ms_median = hist_quantile(r->frame_hist, s->frames, 0.5);
+	s->frame_ms_p95 = hist_quantile(r->frame_hist, s->frames, 0.95);
 	mvod_rpe_finish(&s->rpe);
 	s->have_gt = r->gt_path.n > 0 && r->gt_path.n == r->est_path.n;
 	if (!s->have_gt)
@@ -423,10 +482,11 @@ static void summarise(struct run *r)
 	double R[9], t[3], sc;
 	bool sim3 = r->o->vo.scale_mode == MVOD_SCALE_MODE_AUTO;
 	if (mvod_umeyama(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, sim3, R, t, &sc) != 0) {
-		s->ate_rmse_m = NAN; /* static or too short: no alignment exists */
+		s->ate_rmse_m = s->ate_scale = NAN; /* static or too short: no alignment exists */
 		return;
 	}
 	s->ate_rmse_m = mvod_ate_rmse(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, R, t, sc);
+	s->ate_scale = sc;
 	if (sim3)
 		align_for_plot(r, R, t, sc);
 }

@@ -15,6 +15,16 @@
 extern "C" {
 #endif
 
+/* One processed frame, as a benchmark sees it; pointers are borrowed for the call only. */
+struct mvod_frame_report {
+	int64_t index;
+	const struct mvod_pose *est; /* camera-to-world */
+	const struct mvod_pose *gt;  /* NULL when the frame has no ground-truth pose */
+	double frame_ms;             /* capture and every VO stage */
+};
+/* Called after every frame; a negative errno stops the run with that error. */
+typedef int (*mvod_frame_fn)(void *ctx, const struct mvod_frame_report *f);
+
 struct mvod_run_opts {
 	const char *source;     /* URI */
 	const char *calib;      /* file, or NULL when the source carries intrinsics */
@@ -23,6 +33,9 @@ struct mvod_run_opts {
 	enum mvod_traj_format traj_format;
 	const char *plot;       /* PNG, or NULL */
 	int64_t max_frames;     /* 0 = all */
+	int require_gt;         /* a frame without a ground-truth pose is an error (as --scale gt) */
+	mvod_frame_fn on_frame; /* or NULL */
+	void *on_frame_ctx;
 	struct mvod_vo_params vo;
 };
 void mvod_run_opts_default(struct mvod_run_opts *o);
@@ -35,9 +48,11 @@ struct mvod_run_summary {
 	double wall_s, fps;
 	double stage_ms_mean[MVOD_STAGE_COUNT];
 	double stage_ms_max[MVOD_STAGE_COUNT];
+	double frame_ms_median, frame_ms_p95; /* whole frame, within 1 % (a log histogram) */
 	/* with ground truth */
 	int have_gt;
 	double ate_rmse_m;   /* after SE(3) (gt scale) or Sim(3) (auto scale) alignment */
+	double ate_scale;    /* the alignment's scale: estimate units to metres (1 for SE(3)) */
 	double path_len_m;   /* ground-truth path length */
 	struct mvod_rpe rpe;
 };

@@ -2,6 +2,8 @@
 #ifndef MVOD_PLOT_H
 #define MVOD_PLOT_H
 
+#include <stdbool.h>
+
 #include "mvod/geom.h"
 #include "mvod/image.h"
 
@@ -29,6 +31,37 @@ int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz
  */
 int mvod_plot_topdown_draw(struct mvod_image *out, const char *title, const double *est_xyz,
 			   int n_est, const double heading[9], const double *gt_xyz, int n_gt);
+
+enum mvod_plot_style {
+	MVOD_PLOT_LINE = 0,
+	MVOD_PLOT_DASHED = 1,
+	MVOD_PLOT_POINTS = 2, /* markers; with point_labels numbered, and named in a key beside */
+};
+
+/* One data series; borrowed for the call. Non-finite values are left out. */
+struct mvod_plot_series {
+	const char *label; /* legend text */
+	const double *x, *y;
+	int n;
+	enum mvod_plot_style style;
+	const char *const *point_labels; /* POINTS: n texts beside the markers, or NULL */
+};
+
+/* One chart: axis titles with units, and its series (colours in order: blue, grey, red, ...). */
+struct mvod_plot_panel {
+	const char *x_label, *y_label;
+	const struct mvod_plot_series *series;
+	int n_series;
+	bool log_x; /* logarithmic x axis; points with x <= 0 are left out */
+};
+
+/*
+ * Panels stacked top to bottom under one title, each with its own axes, ticks, grid and
+ * legend; axes fit the data (y from 0 when no value is negative). Written through a temporary
+ * file and rename(). Returns 0 or -errno.
+ */
+int mvod_plot_chart(const char *path, const char *title, const struct mvod_plot_panel *panels,
+		    int n_panels);
 
 #ifdef __cplusplus
 }

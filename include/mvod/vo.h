@@ -1,6 +1,6 @@
 /*
- * Visual odometry: preprocess (resize, blur, undistort, grey), frontend (ORB + Hamming
- * matching with Lowe's ratio test and optional cross-check), motion (essential matrix by
+ * Visual odometry: preprocess (resize, blur, undistort, grey), frontend (ORB or SIFT, matched
+ * by brute force or FLANN with Lowe's ratio test and/or a cross-check), motion (essential matrix by
  * RANSAC, cheirality among the four decompositions, relative scale), and the pose chain.
  */
 #ifndef MVOD_VO_H
@@ -48,6 +48,32 @@ enum mvod_robust_method {
 };
 int mvod_robust_method_parse(const char *name, enum mvod_robust_method *out);
 
+/* Keypoint detector and descriptor. */
+enum mvod_detector {
+	MVOD_DETECTOR_ORB = 0,  /* binary 256-bit descriptors: fast, the default */
+	MVOD_DETECTOR_SIFT = 1, /* 128 floats: slower, more distinctive */
+};
+int mvod_detector_parse(const char *name, enum mvod_detector *out);
+const char *mvod_detector_name(enum mvod_detector d);
+
+/*
+ * How features of consecutive frames are paired. Brute force on ORB is mvod's own Hamming
+ * table; on SIFT, OpenCV's L2 BFMatcher. FLANN is OpenCV's FlannBasedMatcher: multi-probe LSH
+ * (6 tables, key 12 bits, probe level 1) for ORB, 5 randomised kd-trees for SIFT.
+ */
+enum mvod_matcher_kind {
+	MVOD_MATCHER_BF = 0,     /* brute force, ratio test and cross-check: the default */
+	MVOD_MATCHER_BF_CROSS,   /* brute force, mutual nearest neighbours, the best_n closest */
+	MVOD_MATCHER_BF_RATIO,   /* brute force, ratio test only */
+	MVOD_MATCHER_FLANN,      /* FLANN nearest neighbour, unfiltered */
+	MVOD_MATCHER_FLANN_RATIO, /* FLANN with the ratio test */
+	MVOD_MATCHER_COUNT,
+};
+int mvod_matcher_kind_parse(const char *name, enum mvod_matcher_kind *out);
+const char *mvod_matcher_kind_name(enum mvod_matcher_kind m);
+/* Whether the kind applies Lowe's ratio test (and so reads mvod_vo_params.ratio). */
+bool mvod_matcher_uses_ratio(enum mvod_matcher_kind m);
+
 /* What happened to a frame (the "mark" on a frame whose pose was held). */
 enum mvod_frame_status {
 	MVOD_FRAME_MOTION = 0,       /* full motion estimated; the frame became the reference */
@@ -75,9 +101,11 @@ extern const char *const mvod_stage_names[MVOD_STAGE_COUNT];
 struct mvod_vo_params {
 	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
-	int max_features;       /* ORB feature cap. 2000 */
-	double ratio;           /* Lowe's ratio test threshold; >= 1 turns it off. 0.8 */
-	bool cross_check;       /* keep only mutual best matches. true */
+	enum mvod_detector detector; /* ORB */
+	int max_features;       /* feature cap. 2000 */
+	enum mvod_matcher_kind matcher; /* BF */
+	double ratio;           /* Lowe's ratio test threshold (matchers with one); >= 1 = off. 0.8 */
+	int best_n;             /* BF_CROSS keeps this many closest mutual matches. 200 */
 	enum mvod_robust_method robust; /* MAGSAC */
 	double ransac_px;       /* inlier threshold (MAGSAC: its upper bound), pixels. 1.0 */
 	double ransac_conf;     /* E-RANSAC confidence. 0.999 */

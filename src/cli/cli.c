@@ -21,9 +21,11 @@ static const struct option run_opts[] = {
 	{"gt", required_argument, NULL, CLI_OPT_GT},
 	{"max-frames", required_argument, NULL, CLI_OPT_MAX_FRAMES},
 	{"scale", required_argument, NULL, CLI_OPT_SCALE},
+	{"detector", required_argument, NULL, CLI_OPT_DETECTOR},
+	{"matcher", required_argument, NULL, CLI_OPT_MATCHER},
 	{"features", required_argument, NULL, CLI_OPT_FEATURES},
 	{"ratio", required_argument, NULL, CLI_OPT_RATIO},
-	{"no-cross-check", no_argument, NULL, CLI_OPT_NO_CROSS},
+	{"best", required_argument, NULL, CLI_OPT_BEST},
 	{"robust", required_argument, NULL, CLI_OPT_ROBUST},
 	{"ransac-px", required_argument, NULL, CLI_OPT_RANSAC_PX},
 	{"confidence", required_argument, NULL, CLI_OPT_CONFIDENCE},
@@ -150,9 +152,18 @@ void cli_usage_vo(FILE *out)
 "Visual odometry:\n"
 "  --scale auto|gt       step length from triangulated structure (auto, default; the first\n"
 "                        step defines the unit) or from the ground truth (gt: benchmarking)\n"
-"  --features N          ORB feature cap (default 2000)\n"
+"  --detector orb|sift   keypoints and descriptors: ORB (default; binary, fast) or SIFT\n"
+"  --matcher M           how features of consecutive frames are paired (default bf):\n"
+"                          bf          brute force, ratio test and cross-check\n"
+"                          bf-cross    brute force, mutual nearest neighbours, the --best N\n"
+"                                      closest\n"
+"                          bf-ratio    brute force, ratio test only\n"
+"                          flann       FLANN nearest neighbour, unfiltered (LSH 6/12/1 for\n"
+"                                      ORB, 5 kd-trees for SIFT)\n"
+"                          flann-ratio FLANN with the ratio test\n"
+"  --features N          feature cap (default 2000)\n"
 "  --ratio R             Lowe's ratio test threshold, 1 = off (default 0.8)\n"
-"  --no-cross-check      keep matches that are not mutual best matches\n"
+"  --best N              matches kept by bf-cross, 0 = all (default 200)\n"
 "  --robust magsac|ransac  robust estimator of the essential matrix: MAGSAC++ (default)\n"
 "                        or classic RANSAC\n"
 "  --ransac-px P         inlier threshold in pixels (MAGSAC: its upper bound; default 1.0)\n"
@@ -188,15 +199,25 @@ static int parse_vo_option(int id, const char *arg, struct mvod_vo_params *vo)
 		else
 			ret = cli_bad_value("scale", arg, "auto or gt");
 		return ret;
+	case CLI_OPT_DETECTOR:
+		return mvod_detector_parse(arg, &vo->detector)
+			       ? cli_bad_value("detector", arg, "orb or sift")
+			       : 0;
+	case CLI_OPT_MATCHER:
+		return mvod_matcher_kind_parse(arg, &vo->matcher)
+			       ? cli_bad_value("matcher", arg,
+					       "bf, bf-cross, bf-ratio, flann or flann-ratio")
+			       : 0;
 	case CLI_OPT_FEATURES:
 		ret = cli_parse_int("features", arg, 50, 100000, &v);
 		vo->max_features = (int)v;
 		return ret;
 	case CLI_OPT_RATIO:
 		return cli_parse_double("ratio", arg, 0.1, 1.0, &vo->ratio);
-	case CLI_OPT_NO_CROSS:
-		vo->cross_check = false;
-		return 0;
+	case CLI_OPT_BEST:
+		ret = cli_parse_int("best", arg, 0, 100000, &v);
+		vo->best_n = (int)v;
+		return ret;
 	case CLI_OPT_ROBUST:
 		return mvod_robust_method_parse(arg, &vo->robust)
 			       ? cli_bad_value("robust", arg, "magsac or ransac")
@@ -301,4 +322,17 @@ int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn
 	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet)
 {
 	return cli_getopt_args(argc, argv, own, own_parse, ctx, usage, o, quiet, NULL, 0, NULL);
+}
+
+/*
+ * FFmpeg and libcamera print their own diagnostics (a corrupt file, every camera probed) before
+ * mvod can say which source and what to do; keep them for --log-level debug. A value the user
+ * exported wins.
+ */
+void cli_quiet_libraries(void)
+{
+	if (mvod_log_get_level() >= MVOD_LOG_DEBUG)
+		return;
+	setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
+	setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
 }

@@ -27,13 +27,17 @@ int cli_parse_board(const char *s, struct mvod_board *b);
  */
 int cli_check_writable(const char *opt, const char *path);
 
+/* Leaves FFmpeg's and libcamera's own diagnostics for --log-level debug: mvod says what to do. */
+void cli_quiet_libraries(void);
+
 /* The subcommand's name for messages ("mvod", "mvod calibrate", ...). */
 extern const char *cli_prog;
 
 /* Option ids of the shared groups; each command numbers its own from CLI_OPT_OWN. */
 enum cli_opt_id {
 	CLI_OPT_SOURCE = 256, CLI_OPT_CALIB, CLI_OPT_GT, CLI_OPT_MAX_FRAMES,
-	CLI_OPT_SCALE, CLI_OPT_FEATURES, CLI_OPT_RATIO, CLI_OPT_NO_CROSS, CLI_OPT_ROBUST,
+	CLI_OPT_SCALE, CLI_OPT_DETECTOR, CLI_OPT_MATCHER, CLI_OPT_FEATURES, CLI_OPT_RATIO,
+	CLI_OPT_BEST, CLI_OPT_ROBUST,
 	CLI_OPT_RANSAC_PX, CLI_OPT_CONFIDENCE, CLI_OPT_MIN_PARALLAX, CLI_OPT_RESIZE, CLI_OPT_BLUR,
 	CLI_OPT_LOG_LEVEL, CLI_OPT_VERSION,
 	CLI_OPT_OWN = 512,
@@ -80,5 +84,6 @@ int mvod_cmd_calibrate(int argc, char **argv);
 int mvod_cmd_board(int argc, char **argv);
 int mvod_cmd_convert(int argc, char **argv);
 int mvod_cmd_view(int argc, char **argv);
+int mvod_cmd_bench(int argc, char **argv);
 
 #endif

@@ -136,7 +136,8 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 	printf("mvod: ms per frame, mean (max):");
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		printf(" %s %.2f (%.1f)", mvod_stage_names[k], s->stage_ms_mean[k], s->stage_ms_max[k]);
-	printf("\n");
+	printf("\nmvod: frame time median %.1f ms, 95th percentile %.1f ms\n", s->frame_ms_median,
+	       s->frame_ms_p95);
 	if (!s->have_gt)
 		return;
 	printf("mvod: accuracy vs ground truth: rotation error %.3f deg/frame (max %.3f), "
@@ -151,26 +152,13 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
 }
 
-/*
- * FFmpeg and libcamera print their own diagnostics (a corrupt file, every camera probed) before
- * mvod can say which source and what to do; keep them for --log-level debug. A value the user
- * exported wins.
- */
-static void quiet_libraries(void)
-{
-	if (mvod_log_get_level() >= MVOD_LOG_DEBUG)
-		return;
-	setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
-	setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
-}
-
 int mvod_cmd_run(int argc, char **argv)
 {
 	struct cli c = {0};
 	int ret = parse_cli(argc, argv, &c);
 	if (ret)
 		return ret > 0 ? 0 : EXIT_USAGE;
-	quiet_libraries();
+	cli_quiet_libraries();
 	if (c.list_cameras) {
 		mvod_capture_list_cameras(stdout);
 		return EXIT_SUCCESS;

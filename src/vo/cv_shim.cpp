@@ -1,12 +1,14 @@
 #include "cv_shim.h"
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/features2d.hpp>
+#include <opencv2/flann.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "util/shim_guard.hpp"
@@ -115,48 +117,132 @@ extern "C" void mvod_cv_preproc_destroy(struct mvod_cv_preproc *p)
 	delete p;
 }
 
-struct mvod_cv_orb {
-	cv::Ptr<cv::ORB> orb;
+struct mvod_cv_detector {
+	cv::Ptr<cv::Feature2D> f2d;
+	int desc_bytes;
 	std::vector<cv::KeyPoint> kps;
 	cv::Mat desc;
 };
 
-extern "C" int mvod_cv_orb_create(int max_features, int width, int height, struct mvod_cv_orb **out)
+extern "C" int mvod_cv_desc_bytes(enum mvod_detector kind)
+{
+	return kind == MVOD_DETECTOR_SIFT ? MVOD_SIFT_DESC_BYTES : MVOD_ORB_DESC_BYTES;
+}
+
+extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features, int width,
+				       int height, struct mvod_cv_detector **out)
 {
 	if (max_features < 8 || width < 32 || height < 32)
 		return -EINVAL;
 	return mvod_guarded([&] {
-		auto *o = new mvod_cv_orb();
-		o->orb = cv::ORB::create(max_features);
-		o->kps.reserve((size_t)max_features * 2);
-		o->desc.create(max_features * 2, MVOD_ORB_DESC_BYTES, CV_8U);
-		*out = o;
+		auto *d = new mvod_cv_detector();
+		if (kind == MVOD_DETECTOR_SIFT)
+			d->f2d = cv::SIFT::create(max_features);
+		else
+			d->f2d = cv::ORB::create(max_features);
+		d->desc_bytes = mvod_cv_desc_bytes(kind);
+		d->kps.reserve((size_t)max_features * 2);
+		d->desc.create(max_features * 2, d->desc_bytes, CV_8U);
+		*out = d;
 		return 0;
 	});
 }
 
-extern "C" int mvod_cv_orb_detect(struct mvod_cv_orb *o, const struct mvod_image *grey,
-				  struct mvod_features *out)
+extern "C" int mvod_cv_detect(struct mvod_cv_detector *d, const struct mvod_image *grey,
+			      struct mvod_features *out)
 {
-	if (grey->fmt != MVOD_PIX_GREY)
+	if (grey->fmt != MVOD_PIX_GREY || out->desc_bytes != d->desc_bytes)
 		return -EINVAL;
 	return mvod_guarded([&] {
-		o->orb->detectAndCompute(view(grey), cv::noArray(), o->kps, o->desc);
-		int n = std::min((int)o->kps.size(), out->cap);
+		d->f2d->detectAndCompute(view(grey), cv::noArray(), d->kps, d->desc);
+		int n = std::min((int)d->kps.size(), out->cap);
 		for (int i = 0; i < n; i++) {
-			out->kp[i].x = o->kps[(size_t)i].pt.x;
-			out->kp[i].y = o->kps[(size_t)i].pt.y;
-			memcpy(out->desc + (size_t)i * MVOD_ORB_DESC_BYTES, o->desc.ptr(i),
-			       MVOD_ORB_DESC_BYTES);
+			out->kp[i].x = d->kps[(size_t)i].pt.x;
+			out->kp[i].y = d->kps[(size_t)i].pt.y;
+			memcpy(out->desc + (size_t)i * d->desc_bytes, d->desc.ptr(i),
+			       (size_t)d->desc_bytes);
 		}
 		out->n = n;
 		return 0;
 	});
 }
 
-extern "C" void mvod_cv_orb_destroy(struct mvod_cv_orb *o)
+extern "C" void mvod_cv_detector_destroy(struct mvod_cv_detector *d)
 {
-	delete o;
+	delete d;
+}
+
+struct mvod_cv_nn {
+	cv::Ptr<cv::DescriptorMatcher> m;
+	bool binary;
+	std::vector<std::vector<cv::DMatch>> knn;
+};
+
+/*
+ * The reference implementation's FLANN settings: LSH with 6 tables, 12-bit keys, probe level
+ * 1 for binary descriptors; 5 kd-trees searched with 50 checks for SIFT.
+ */
+static cv::Ptr<cv::DescriptorMatcher> make_matcher(bool binary, bool flann)
+{
+	if (!flann)
+		return cv::BFMatcher::create(binary ? cv::NORM_HAMMING : cv::NORM_L2);
+	auto search = cv::makePtr<cv::flann::SearchParams>(50);
+	if (binary)
+		return cv::makePtr<cv::FlannBasedMatcher>(
+			cv::makePtr<cv::flann::LshIndexParams>(6, 12, 1), search);
+	return cv::makePtr<cv::FlannBasedMatcher>(cv::makePtr<cv::flann::KDTreeIndexParams>(5),
+						  search);
+}
+
+extern "C" int mvod_cv_nn_create(enum mvod_detector kind, bool flann, struct mvod_cv_nn **out)
+{
+	return mvod_guarded([&] {
+		auto *nn = new mvod_cv_nn();
+		nn->binary = kind == MVOD_DETECTOR_ORB;
+		nn->m = make_matcher(nn->binary, flann);
+		*out = nn;
+		return 0;
+	});
+}
+
+static cv::Mat descriptors(const struct mvod_features *f, bool binary)
+{
+	if (binary)
+		return cv::Mat(f->n, f->desc_bytes, CV_8U, f->desc);
+	return cv::Mat(f->n, f->desc_bytes / (int)sizeof(float), CV_32F, f->desc);
+}
+
+extern "C" int mvod_cv_nn_search(struct mvod_cv_nn *nn, const struct mvod_features *a,
+				 const struct mvod_features *b, float *best_a, float *second_a,
+				 int *idx_a, int *idx_b)
+{
+	return mvod_guarded([&] {
+		cv::Mat da = descriptors(a, nn->binary), db = descriptors(b, nn->binary);
+		/* OpenCV appends to the result vector: it must start empty. */
+		nn->knn.clear();
+		nn->m->knnMatch(da, db, nn->knn, 2);
+		for (int i = 0; i < a->n; i++) {
+			const auto *k = (size_t)i < nn->knn.size() ? &nn->knn[(size_t)i] : nullptr;
+			bool found = k && !k->empty();
+			idx_a[i] = found ? (*k)[0].trainIdx : -1;
+			best_a[i] = found ? (*k)[0].distance : HUGE_VALF;
+			second_a[i] = found && k->size() > 1 ? (*k)[1].distance : best_a[i];
+		}
+		if (!idx_b)
+			return 0;
+		nn->knn.clear();
+		nn->m->knnMatch(db, da, nn->knn, 1);
+		for (int j = 0; j < b->n; j++) {
+			const auto *k = (size_t)j < nn->knn.size() ? &nn->knn[(size_t)j] : nullptr;
+			idx_b[j] = k && !k->empty() ? (*k)[0].trainIdx : -1;
+		}
+		return 0;
+	});
+}
+
+extern "C" void mvod_cv_nn_destroy(struct mvod_cv_nn *nn)
+{
+	delete nn;
 }
 
 extern "C" int mvod_cv_find_essential(const double *x1, const double *x2, int n, bool magsac,

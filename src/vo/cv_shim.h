@@ -10,26 +10,30 @@
 
 #include "mvod/calib.h"
 #include "mvod/image.h"
+#include "mvod/vo.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 #define MVOD_ORB_DESC_BYTES 32
+#define MVOD_SIFT_DESC_BYTES (128 * 4) /* 128 floats */
 
 struct mvod_keypoint {
 	float x, y; /* pixels in the preprocessed image */
 };
 
-/* Caller-owned: kp[cap], desc[cap * MVOD_ORB_DESC_BYTES]. */
+/* Caller-owned: kp[cap], desc[cap * desc_bytes]. */
 struct mvod_features {
 	int n, cap;
+	int desc_bytes; /* MVOD_ORB_DESC_BYTES (binary) or MVOD_SIFT_DESC_BYTES (float) */
 	struct mvod_keypoint *kp;
 	uint8_t *desc;
 };
 
 struct mvod_match {
-	int a, b; /* index into the first and second feature set */
+	int a, b;   /* index into the first and second feature set */
+	float dist; /* descriptor distance: Hamming bits (ORB) or L2 (SIFT) */
 };
 
 /* Undistort (maps computed once), resize, blur, grey: the whole preprocess stage. */
@@ -45,12 +49,33 @@ int mvod_cv_preproc_run(struct mvod_cv_preproc *p, const struct mvod_image *in,
 			struct mvod_image *out);
 void mvod_cv_preproc_destroy(struct mvod_cv_preproc *p);
 
-struct mvod_cv_orb;
-int mvod_cv_orb_create(int max_features, int width, int height, struct mvod_cv_orb **out);
-/* Detects up to out->cap keypoints with descriptors. */
-int mvod_cv_orb_detect(struct mvod_cv_orb *orb, const struct mvod_image *grey,
-		       struct mvod_features *out);
-void mvod_cv_orb_destroy(struct mvod_cv_orb *orb);
+/* Bytes of one descriptor of a detector. */
+int mvod_cv_desc_bytes(enum mvod_detector kind);
+
+struct mvod_cv_detector;
+int mvod_cv_detector_create(enum mvod_detector kind, int max_features, int width, int height,
+			    struct mvod_cv_detector **out);
+/* Detects up to out->cap keypoints with descriptors (out->desc_bytes must match the detector). */
+int mvod_cv_detect(struct mvod_cv_detector *d, const struct mvod_image *grey,
+		   struct mvod_features *out);
+void mvod_cv_detector_destroy(struct mvod_cv_detector *d);
+
+/*
+ * Nearest neighbours by OpenCV: brute force L2 (float descriptors) or FLANN (LSH for binary,
+ * kd-trees for float). OpenCV allocates its result vectors and, for FLANN, the index on every
+ * call: this path is not allocation-free, unlike mvod's own Hamming table.
+ */
+struct mvod_cv_nn;
+int mvod_cv_nn_create(enum mvod_detector kind, bool flann, struct mvod_cv_nn **out);
+/*
+ * For each feature i of a: the distances of its nearest and second nearest in b and the
+ * nearest's index (-1 when none was found; second = best when only one was: such a match
+ * cannot pass a ratio test). idx_b, when not NULL: for each feature of b, its nearest in a.
+ */
+int mvod_cv_nn_search(struct mvod_cv_nn *nn, const struct mvod_features *a,
+		      const struct mvod_features *b, float *best_a, float *second_a, int *idx_a,
+		      int *idx_b);
+void mvod_cv_nn_destroy(struct mvod_cv_nn *nn);
 
 /*
  * Essential matrix (five-point) from normalised correspondences x1 -> x2 (n x 2 each), so

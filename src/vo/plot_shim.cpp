@@ -36,16 +36,19 @@ const cv::Scalar WHITE(255, 255, 255), BLACK(0, 0, 0), GRID(225, 225, 225);
 const cv::Scalar EST_COLOR(190, 90, 20), GT_COLOR(70, 70, 70), START_COLOR(40, 160, 40),
 	HEADING_COLOR(30, 30, 210), NEUTRAL(110, 110, 110);
 
-/* World (x, z) in metres to pixels of the plot area: x right, z (forward) up, equal aspect. */
+/*
+ * Data (x, z) to pixels of a w x h plot area centred on (cx, cz): x right, z up. The top-down
+ * view has sx = sz (metres on both axes); a chart scales each axis to its data.
+ */
 struct View {
-	double cx, cz, scale;
+	double cx, cz, sx, sz;
+	int w, h;
 	cv::Point2d px(double x, double z) const
 	{
-		return {PLOT_RECT.width / 2.0 + (x - cx) * scale,
-			PLOT_RECT.height / 2.0 - (z - cz) * scale};
+		return {w / 2.0 + (x - cx) * sx, h / 2.0 - (z - cz) * sz};
 	}
-	double x_at(double u) const { return cx + (u - PLOT_RECT.width / 2.0) / scale; }
-	double z_at(double v) const { return cz - (v - PLOT_RECT.height / 2.0) / scale; }
+	double x_at(double u) const { return cx + (u - w / 2.0) / sx; }
+	double z_at(double v) const { return cz - (v - h / 2.0) / sz; }
 };
 
 struct Path {
@@ -102,7 +105,8 @@ View fit_view(const Path &est, const Path &gt)
 	double span_z = std::max(hi.y - lo.y, MIN_EXTENT_M);
 	double scale = std::min((PLOT_RECT.width - 2 * PAD_PX) / span_x,
 				(PLOT_RECT.height - 2 * PAD_PX) / span_z);
-	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, scale};
+	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, scale, scale, PLOT_RECT.width,
+		PLOT_RECT.height};
 }
 
 /* The smallest 1, 2 or 5 x 10^k that is at least raw. */
@@ -136,45 +140,64 @@ cv::Size text_size(const std::string &s, double size, int thick = 1)
 	return cv::getTextSize(s, FONT, size, thick, &baseline);
 }
 
-void draw_x_ticks(cv::Mat &canvas, cv::Mat &plot, const View &v, double step)
+/* A grid line at plot column u and its label under the plot; rect: the plot on the canvas. */
+void x_tick(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, int u, const std::string &s)
 {
-	for (long k = std::lround(std::ceil(v.x_at(0) / step));
-	     k * step <= v.x_at(PLOT_RECT.width); k++) {
-		int u = (int)std::lround(v.px(k * step, 0).x);
-		cv::line(plot, {u, 0}, {u, PLOT_RECT.height}, GRID, 1);
-		std::string s = tick_label(k * step, step);
-		cv::Size ts = text_size(s, 0.5);
-		put_text(canvas, s, {PLOT_RECT.x + u - ts.width / 2, PLOT_RECT.br().y + 22}, 0.5);
-	}
+	cv::line(plot, {u, 0}, {u, rect.height}, GRID, 1);
+	cv::Size ts = text_size(s, 0.5);
+	put_text(canvas, s, {rect.x + u - ts.width / 2, rect.br().y + 22}, 0.5);
 }
 
-void draw_z_ticks(cv::Mat &canvas, cv::Mat &plot, const View &v, double step)
+void draw_x_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
+		  double step)
 {
-	for (long k = std::lround(std::ceil(v.z_at(PLOT_RECT.height) / step));
-	     k * step <= v.z_at(0); k++) {
+	for (long k = std::lround(std::ceil(v.x_at(0) / step)); k * step <= v.x_at(rect.width);
+	     k++)
+		x_tick(canvas, plot, rect, (int)std::lround(v.px(k * step, 0).x),
+		       tick_label(k * step, step));
+}
+
+/* A logarithmic x axis (the view holds log10 x): ticks at 1, 2 and 5 times powers of ten. */
+void draw_x_log_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v)
+{
+	double lo = v.x_at(0), hi = v.x_at(rect.width);
+	for (int k = (int)std::floor(lo); k <= (int)std::ceil(hi); k++)
+		for (double m : {1.0, 2.0, 5.0}) {
+			double lx = std::log10(m) + k;
+			if (lx < lo || lx > hi)
+				continue;
+			char buf[32];
+			std::snprintf(buf, sizeof(buf), "%g", m * std::pow(10.0, k));
+			x_tick(canvas, plot, rect, (int)std::lround(v.px(lx, 0).x), buf);
+		}
+}
+
+void draw_z_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
+		  double step)
+{
+	for (long k = std::lround(std::ceil(v.z_at(rect.height) / step)); k * step <= v.z_at(0);
+	     k++) {
 		int w = (int)std::lround(v.px(0, k * step).y);
-		cv::line(plot, {0, w}, {PLOT_RECT.width, w}, GRID, 1);
+		cv::line(plot, {0, w}, {rect.width, w}, GRID, 1);
 		std::string s = tick_label(k * step, step);
 		cv::Size ts = text_size(s, 0.5);
-		put_text(canvas, s, {PLOT_RECT.x - 8 - ts.width, PLOT_RECT.y + w + ts.height / 2},
-			 0.5);
+		put_text(canvas, s, {rect.x - 8 - ts.width, rect.y + w + ts.height / 2}, 0.5);
 	}
 }
 
-void draw_axis_labels(cv::Mat &canvas)
+void draw_axis_labels(cv::Mat &canvas, const cv::Rect &rect, const std::string &xl,
+		      const std::string &zl)
 {
-	const std::string xl = "x [m]", zl = "z [m]";
 	cv::Size xs = text_size(xl, 0.65);
-	put_text(canvas, xl, {PLOT_RECT.x + (PLOT_RECT.width - xs.width) / 2, CANVAS_H - 20},
-		 0.65);
+	put_text(canvas, xl, {rect.x + (rect.width - xs.width) / 2, rect.br().y + 50}, 0.65);
 
 	/* putText cannot rotate: render the label on its own, turn it, paste it. */
 	cv::Size zs = text_size(zl, 0.65);
 	cv::Mat label(zs.height + 10, zs.width + 4, CV_8UC3, WHITE), turned;
 	put_text(label, zl, {2, zs.height + 3}, 0.65);
 	cv::rotate(label, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-	turned.copyTo(canvas(cv::Rect(12, PLOT_RECT.y + (PLOT_RECT.height - turned.rows) / 2,
-				      turned.cols, turned.rows)));
+	int top = std::max(0, rect.y + (rect.height - turned.rows) / 2);
+	turned.copyTo(canvas(cv::Rect(12, top, turned.cols, turned.rows)));
 }
 
 void draw_title(cv::Mat &canvas, const char *title)
@@ -189,13 +212,19 @@ void draw_title(cv::Mat &canvas, const char *title)
 	put_text(canvas, title, {(CANVAS_W - ts.width) / 2, 20 + ts.height}, size, 2);
 }
 
-void draw_axes(cv::Mat &canvas, cv::Mat &plot, const View &v)
+void draw_axes(cv::Mat &canvas, const cv::Rect &rect, const View &v, const std::string &xl,
+	       const std::string &zl, bool log_x = false)
 {
-	double step = nice_step(TICK_TARGET_PX / v.scale);
-	draw_x_ticks(canvas, plot, v, step);
-	draw_z_ticks(canvas, plot, v, step);
-	cv::rectangle(canvas, PLOT_RECT, BLACK, 1);
-	draw_axis_labels(canvas);
+	cv::Mat plot = canvas(rect);
+	if (log_x)
+		draw_x_log_ticks(canvas, plot, rect, v);
+	else
+		draw_x_ticks(canvas, plot, rect, v, nice_step(TICK_TARGET_PX / v.sx));
+	/* A short chart panel still gets three or more ticks. */
+	double z_px = std::min(TICK_TARGET_PX, rect.height / 5.0);
+	draw_z_ticks(canvas, plot, rect, v, nice_step(z_px / v.sz));
+	cv::rectangle(canvas, rect, BLACK, 1);
+	draw_axis_labels(canvas, rect, xl, zl);
 }
 
 /* Carries the dash phase across segments so the pattern runs evenly along the whole path. */
@@ -252,12 +281,17 @@ bool heading_dir(const double R[9], cv::Point2d &dir)
 	return true;
 }
 
+void point_marker(cv::Mat &img, cv::Point2d p, const cv::Scalar &color)
+{
+	cv::circle(img, fixed(p), 5 * (int)SUBPIX, color, cv::FILLED, cv::LINE_AA, SHIFT);
+}
+
 void arrow(cv::Mat &img, cv::Point2d from, cv::Point2d to)
 {
 	cv::arrowedLine(img, fixed(from), fixed(to), HEADING_COLOR, 2, cv::LINE_AA, SHIFT, 0.3);
 }
 
-enum class Glyph { LINE, DASHED, START, END, ARROW };
+enum class Glyph { LINE, DASHED, START, END, ARROW, POINT };
 
 struct LegendEntry {
 	std::string label;
@@ -285,6 +319,9 @@ void draw_glyph(cv::Mat &img, const LegendEntry &e, cv::Point2d c)
 	case Glyph::ARROW:
 		arrow(img, c - half, c + half);
 		break;
+	case Glyph::POINT:
+		point_marker(img, c, e.color);
+		break;
 	}
 }
 
@@ -299,17 +336,19 @@ int segments_under(const cv::Rect &r, const std::vector<cv::Point2d> &pts)
 	return n;
 }
 
-cv::Rect legend_rect(cv::Size size, const std::vector<cv::Point2d> &est,
-		     const std::vector<cv::Point2d> &gt)
+using Drawn = std::vector<std::vector<cv::Point2d>>;
+
+cv::Rect legend_rect(cv::Size area, cv::Size size, const Drawn &paths)
 {
-	const int m = 10, right = PLOT_RECT.width - m - size.width,
-		  bottom = PLOT_RECT.height - m - size.height;
+	const int m = 10, right = area.width - m - size.width, bottom = area.height - m - size.height;
 	const cv::Point corners[] = {{right, m}, {m, m}, {right, bottom}, {m, bottom}};
 	cv::Rect best;
 	int best_hits = -1;
 	for (const cv::Point &c : corners) {
 		cv::Rect r(c, size);
-		int hits = segments_under(r, est) + segments_under(r, gt);
+		int hits = 0;
+		for (const auto &p : paths)
+			hits += segments_under(r, p);
 		if (best_hits < 0 || hits < best_hits) {
 			best = r;
 			best_hits = hits;
@@ -318,15 +357,14 @@ cv::Rect legend_rect(cv::Size size, const std::vector<cv::Point2d> &est,
 	return best;
 }
 
-void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries,
-		 const std::vector<cv::Point2d> &est, const std::vector<cv::Point2d> &gt)
+void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries, const Drawn &paths)
 {
 	const int row_h = 26, glyph_w = 40, pad = 10;
 	int text_w = 0;
 	for (const LegendEntry &e : entries)
 		text_w = std::max(text_w, text_size(e.label, 0.55).width);
 	cv::Size size(pad + glyph_w + 8 + text_w + pad, 2 * pad + row_h * (int)entries.size() - 6);
-	cv::Rect r = legend_rect(size, est, gt);
+	cv::Rect r = legend_rect(plot.size(), size, paths);
 
 	cv::rectangle(plot, r, WHITE, cv::FILLED);
 	cv::rectangle(plot, r, NEUTRAL, 1);
@@ -338,9 +376,8 @@ void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries,
 }
 
 /* A run whose every pose failed still gets a plot that says so, not a blank grid. */
-void draw_no_data(cv::Mat &plot)
+void draw_no_data(cv::Mat &plot, const std::string &s)
 {
-	const std::string s = "no valid poses";
 	cv::Size ts = text_size(s, 0.8);
 	put_text(plot, s, {(plot.cols - ts.width) / 2, (plot.rows + ts.height) / 2}, 0.8, 1, NEUTRAL);
 }
@@ -379,11 +416,11 @@ cv::Mat render(const char *title, const Path &est, const double *heading, const 
 	std::vector<cv::Point2d> est_px = project(v, est), gt_px = project(v, gt);
 	std::vector<LegendEntry> legend;
 
-	draw_axes(canvas, plot, v);
+	draw_axes(canvas, PLOT_RECT, v, "x [m]", "z [m]");
 	draw_paths(plot, est_px, gt_px, heading, legend);
 	if (est_px.empty() && gt_px.empty())
-		draw_no_data(plot);
-	draw_legend(plot, legend, est_px, gt_px);
+		draw_no_data(plot, "no valid poses");
+	draw_legend(plot, legend, {est_px, gt_px});
 	if (title)
 		draw_title(canvas, title);
 	return canvas;
@@ -397,17 +434,205 @@ std::string extension_of(const std::string &path)
 	return dot == std::string::npos || dot <= base ? std::string() : path.substr(dot);
 }
 
+bool can_write(const char *path)
+{
+	return !extension_of(path).empty() && cv::haveImageWriter(path);
+}
+
+/* Encoded before any file exists, so an encoder error leaves nothing behind. */
+int write_image(const char *path, const cv::Mat &img)
+{
+	std::vector<uchar> buf;
+	if (!cv::imencode(extension_of(path), img, buf))
+		return -EIO;
+	return mvod_write_replace(path, buf.data(), buf.size());
+}
+
 int plot_topdown(const char *path, const char *title, const Path &est, const double *heading,
 		 const Path &gt)
 {
-	std::string ext = extension_of(path);
-	if (ext.empty() || !cv::haveImageWriter(path))
+	if (!can_write(path))
 		return -EINVAL;
-	/* Encoded before any file exists, so an encoder error leaves nothing behind. */
-	std::vector<uchar> png;
-	if (!cv::imencode(ext, render(title, est, heading, gt), png))
-		return -EIO;
-	return mvod_write_replace(path, png.data(), png.size());
+	return write_image(path, render(title, est, heading, gt));
+}
+
+/* --- charts: panels of x-y series --- */
+
+const cv::Scalar PALETTE[] = {EST_COLOR, GT_COLOR, cv::Scalar(40, 40, 200), START_COLOR,
+			      cv::Scalar(0, 140, 230)};
+const int CHART_LEFT = 90, CHART_RIGHT = 30, CHART_TOP = 60, CHART_BOTTOM = 70, CHART_GAP = 10;
+
+cv::Scalar series_color(int i)
+{
+	return PALETTE[i % (int)(sizeof(PALETTE) / sizeof(PALETTE[0]))];
+}
+
+/* The x a panel draws: log10 x on a logarithmic axis. */
+double chart_x(const mvod_plot_panel &p, double x)
+{
+	return p.log_x ? std::log10(x) : x;
+}
+
+/* A point that can be drawn: finite, and x > 0 on a logarithmic axis. */
+bool finite_at(const mvod_plot_panel &p, const mvod_plot_series &s, int i)
+{
+	return std::isfinite(chart_x(p, s.x[i])) && std::isfinite(s.y[i]);
+}
+
+/* Axes that hold every finite point, y from 0 when nothing is negative, with a margin. */
+View fit_chart(const mvod_plot_panel &p, cv::Size area)
+{
+	cv::Point2d lo(HUGE_VAL, HUGE_VAL), hi(-HUGE_VAL, -HUGE_VAL);
+	for (int k = 0; k < p.n_series; k++)
+		for (int i = 0; i < p.series[k].n; i++)
+			if (finite_at(p, p.series[k], i)) {
+				double x = chart_x(p, p.series[k].x[i]), y = p.series[k].y[i];
+				lo = {std::min(lo.x, x), std::min(lo.y, y)};
+				hi = {std::max(hi.x, x), std::max(hi.y, y)};
+			}
+	if (lo.x > hi.x)
+		lo = hi = cv::Point2d(0, 0);
+	if (lo.y > 0)
+		lo.y = 0;
+	/* Flat data still gets a unit range. */
+	double span_x = hi.x > lo.x ? hi.x - lo.x : 1, span_y = hi.y > lo.y ? hi.y - lo.y : 1;
+	double sx = (area.width - 2 * PAD_PX) / span_x, sy = (area.height - 2 * PAD_PX) / span_y;
+	return {(lo.x + hi.x) / 2, (lo.y + hi.y) / 2, sx, sy, area.width, area.height};
+}
+
+/*
+ * Labelled points are numbered on the plot and named in a key beside it: the number goes in
+ * the first of eight places around its marker that overlaps no marker or number yet drawn.
+ */
+void place_number(cv::Mat &plot, cv::Point2d p, const std::string &num,
+		  std::vector<cv::Rect> &taken)
+{
+	cv::Size ts = text_size(num, 0.45);
+	const double w = ts.width, h = ts.height;
+	const cv::Point2d offs[] = {{7, -7},	     {7, 7 + h},	{-7 - w, -7},
+				    {-7 - w, 7 + h}, {-w / 2, -9},	{-w / 2, 9 + h},
+				    {14, h / 2},     {-14 - w, h / 2}};
+	cv::Rect inside(0, 0, plot.cols, plot.rows), best;
+	for (const cv::Point2d &o : offs) {
+		cv::Rect r((int)(p.x + o.x), (int)(p.y + o.y) - ts.height, ts.width, ts.height);
+		bool free = (r & inside) == r;
+		for (const cv::Rect &t : taken)
+			free = free && (r & t).empty();
+		if (free || best.empty())
+			best = r;
+		if (free)
+			break;
+	}
+	taken.push_back(best);
+	put_text(plot, num, {best.x, best.br().y}, 0.45);
+}
+
+std::vector<cv::Point2d> draw_series(cv::Mat &plot, const View &v, const mvod_plot_panel &p,
+				     const mvod_plot_series &s, const cv::Scalar &color)
+{
+	std::vector<cv::Point2d> px;
+	std::vector<int> index;
+	for (int i = 0; i < s.n; i++)
+		if (finite_at(p, s, i)) {
+			px.push_back(v.px(chart_x(p, s.x[i]), s.y[i]));
+			index.push_back(i);
+		}
+	if (s.style != MVOD_PLOT_POINTS) {
+		draw_path(plot, px, color, s.style == MVOD_PLOT_DASHED);
+		return px;
+	}
+	std::vector<cv::Rect> taken;
+	for (const cv::Point2d &q : px) {
+		point_marker(plot, q, color);
+		taken.emplace_back((int)q.x - 5, (int)q.y - 5, 11, 11);
+	}
+	for (size_t j = 0; s.point_labels && j < px.size(); j++)
+		place_number(plot, px[j], std::to_string(index[j] + 1), taken);
+	return {};
+}
+
+const int KEY_W = 300; /* room right of a panel for the key of numbered points */
+
+bool has_key(const mvod_plot_panel &p)
+{
+	for (int k = 0; k < p.n_series; k++)
+		if (p.series[k].style == MVOD_PLOT_POINTS && p.series[k].point_labels)
+			return true;
+	return false;
+}
+
+/* "N  label" for every labelled point, top down beside the plot. */
+void draw_key(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
+{
+	int y = rect.y + 14;
+	for (int k = 0; k < p.n_series; k++)
+		for (int i = 0; p.series[k].point_labels && i < p.series[k].n; i++) {
+			std::string line = std::to_string(i + 1) + "  " +
+					   (p.series[k].point_labels[i] ? p.series[k].point_labels[i] : "");
+			if (!finite_at(p, p.series[k], i))
+				line += " (not drawn)";
+			put_text(canvas, line, {rect.br().x + 12, y}, 0.42);
+			y += 18;
+		}
+}
+
+void draw_panel(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
+{
+	View v = fit_chart(p, rect.size());
+	cv::Mat plot = canvas(rect);
+	draw_axes(canvas, rect, v, p.x_label ? p.x_label : "", p.y_label ? p.y_label : "",
+		  p.log_x);
+	if (has_key(p))
+		draw_key(canvas, rect, p);
+	Drawn drawn;
+	std::vector<LegendEntry> legend;
+	bool any = false;
+	for (int k = 0; k < p.n_series; k++)
+		for (int i = 0; i < p.series[k].n; i++)
+			any = any || finite_at(p, p.series[k], i);
+	if (!any) {
+		draw_no_data(plot, "no data");
+		return;
+	}
+	for (int k = 0; k < p.n_series; k++) {
+		const mvod_plot_series &s = p.series[k];
+		drawn.push_back(draw_series(plot, v, p, s, series_color(k)));
+		Glyph g = s.style == MVOD_PLOT_POINTS	? Glyph::POINT
+			  : s.style == MVOD_PLOT_DASHED ? Glyph::DASHED
+							: Glyph::LINE;
+		legend.push_back({s.label ? s.label : "", g, series_color(k)});
+	}
+	draw_legend(plot, legend, drawn);
+}
+
+cv::Mat render_chart(const char *title, const mvod_plot_panel *panels, int n)
+{
+	/* One panel gets a square-ish area; stacked panels share the height of three. */
+	int panel_h = n == 1 ? 640 : std::max(200, 780 / n);
+	int h = CHART_TOP + n * (panel_h + CHART_BOTTOM + CHART_GAP);
+	cv::Mat canvas(h, CANVAS_W, CV_8UC3, WHITE);
+	for (int i = 0; i < n; i++) {
+		int key = has_key(panels[i]) ? KEY_W : 0;
+		cv::Rect r(CHART_LEFT, CHART_TOP + i * (panel_h + CHART_BOTTOM + CHART_GAP),
+			   CANVAS_W - CHART_LEFT - CHART_RIGHT - key, panel_h);
+		draw_panel(canvas, r, panels[i]);
+	}
+	if (title)
+		draw_title(canvas, title);
+	return canvas;
+}
+
+bool valid_panels(const mvod_plot_panel *panels, int n)
+{
+	if (!panels || n < 1 || n > 8)
+		return false;
+	for (int i = 0; i < n; i++)
+		for (int k = 0; k < panels[i].n_series; k++) {
+			const mvod_plot_series &s = panels[i].series[k];
+			if (s.n < 0 || (s.n > 0 && (!s.x || !s.y)))
+				return false;
+		}
+	return true;
 }
 
 bool paths_ok(const double *est_xyz, int n_est, const double *gt_xyz, int n_gt)
@@ -437,5 +662,17 @@ extern "C" int mvod_plot_topdown_draw(struct mvod_image *out, const char *title,
 		cv::Mat dst(out->h, out->w, CV_8UC3, out->data, (size_t)out->stride);
 		render(title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}).copyTo(dst);
 		return 0;
+	});
+}
+
+extern "C" int mvod_plot_chart(const char *path, const char *title,
+			       const struct mvod_plot_panel *panels, int n_panels)
+{
+	if (!path || !valid_panels(panels, n_panels))
+		return -EINVAL;
+	return mvod_guarded([&] {
+		if (!can_write(path))
+			return -EINVAL;
+		return write_image(path, render_chart(title, panels, n_panels));
 	});
 }

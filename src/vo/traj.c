@@ -8,6 +8,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "util/errbuf.h"
+
 static const char *const format_names[] = {"tum", "kitti"};
 
 int mvod_traj_format_parse(const char *name, enum mvod_traj_format *out)
@@ -109,7 +111,10 @@ int mvod_traj_writer_close(struct mvod_traj_writer *w)
 	return ret;
 }
 
-/* Counts whitespace-separated numbers on a line; 0 for blank and '#' comment lines. */
+/*
+ * Counts whitespace-separated numbers on a line; 0 for blank and '#' comment lines, -1 when
+ * it holds text, -2 for a non-finite number.
+ */
 static int parse_numbers(const char *line, double *v, int max)
 {
 	int n = 0;
@@ -123,6 +128,9 @@ static int parse_numbers(const char *line, double *v, int max)
 		double x = strtod(s, &end);
 		if (end == s)
 			break;
+		/* strtod takes "nan" and "inf": a pose with one is no pose. */
+		if (!isfinite(x))
+			return -2;
 		if (n < max)
 			v[n] = x;
 		n++;
@@ -170,6 +178,22 @@ static int traj_push(struct mvod_traj *tr, int *cap, double t, const struct mvod
 	return 0;
 }
 
+/* Line lineno held n numbers (parse_numbers' count or code) where cols were expected. */
+static int bad_line(const char *path, int lineno, int cols, int n, char *err, size_t errlen)
+{
+	char found[32] = "text";
+	if (n == -2)
+		snprintf(found, sizeof(found), "nan or inf");
+	else if (n >= 0)
+		snprintf(found, sizeof(found), "%d", n);
+	const char *want = cols == 8 ? "8" : cols ? "12" : "8 or 12";
+	const char *layout = cols == 8 ? "TUM: t tx ty tz qx qy qz qw"
+			     : cols    ? "KITTI: a row-major 3x4 pose"
+				       : "TUM or KITTI";
+	return mvod_errf(err, errlen, -EINVAL, "%s:%d: expected %s numbers (%s), found %s", path,
+			 lineno, want, layout, found);
+}
+
 int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen)
 {
 	struct mvod_traj tr = {0};
@@ -177,11 +201,8 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 	char *line = NULL;
 	size_t linecap = 0;
 	FILE *f = fopen(path, "r");
-	if (!f) {
-		ret = -errno;
-		snprintf(err, errlen, "cannot open %s: %s", path, strerror(errno));
-		return ret;
-	}
+	if (!f)
+		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
 	while (getline(&line, &linecap, f) > 0) {
 		double v[12];
 		lineno++;
@@ -193,10 +214,7 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 			tr.format = n == 8 ? MVOD_TRAJ_TUM : MVOD_TRAJ_KITTI;
 		}
 		if (n != cols) {
-			snprintf(err, errlen, "%s:%d: expected %d numbers (%s), found %s", path, lineno,
-				 cols ? cols : 12, cols == 8 ? "TUM" : "KITTI 3x4 or TUM",
-				 n < 0 ? "text" : "another count");
-			ret = -EINVAL;
+			ret = bad_line(path, lineno, cols, n, err, errlen);
 			goto out;
 		}
 		double t;
@@ -206,10 +224,9 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 		if (ret)
 			goto out;
 	}
-	if (tr.n == 0) {
-		snprintf(err, errlen, "%s: no poses", path);
-		ret = -EINVAL;
-	}
+	if (tr.n == 0)
+		ret = mvod_errf(err, errlen, -EINVAL, "%s: no poses (an empty file, or only comments)",
+				path);
 out:
 	free(line);
 	fclose(f);

@@ -35,15 +35,57 @@ const char *mvod_scale_source_name(enum mvod_scale_source s)
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
 }
 
+/* Looks name up in names[0..n); -EINVAL when absent. */
+static int parse_name(const char *name, const char *const *names, int n, int *out)
+{
+	for (int i = 0; i < n; i++) {
+		if (strcmp(name, names[i]) == 0) {
+			*out = i;
+			return 0;
+		}
+	}
+	return -EINVAL;
+}
+
+static const char *const detector_names[] = {"orb", "sift"};
+static const char *const matcher_names[MVOD_MATCHER_COUNT] = {"bf", "bf-cross", "bf-ratio",
+							      "flann", "flann-ratio"};
+#define DETECTORS ((int)(sizeof(detector_names) / sizeof(detector_names[0])))
+
+int mvod_detector_parse(const char *name, enum mvod_detector *out)
+{
+	int i, ret = parse_name(name, detector_names, DETECTORS, &i);
+	if (!ret)
+		*out = (enum mvod_detector)i;
+	return ret;
+}
+
+const char *mvod_detector_name(enum mvod_detector d)
+{
+	return (unsigned)d < DETECTORS ? detector_names[d] : "unknown";
+}
+
+int mvod_matcher_kind_parse(const char *name, enum mvod_matcher_kind *out)
+{
+	int i, ret = parse_name(name, matcher_names, MVOD_MATCHER_COUNT, &i);
+	if (!ret)
+		*out = (enum mvod_matcher_kind)i;
+	return ret;
+}
+
+const char *mvod_matcher_kind_name(enum mvod_matcher_kind m)
+{
+	return (unsigned)m < MVOD_MATCHER_COUNT ? matcher_names[m] : "unknown";
+}
+
+static const char *const robust_names[] = {"magsac", "ransac"};
+
 int mvod_robust_method_parse(const char *name, enum mvod_robust_method *out)
 {
-	if (strcmp(name, "magsac") == 0)
-		*out = MVOD_ROBUST_MAGSAC;
-	else if (strcmp(name, "ransac") == 0)
-		*out = MVOD_ROBUST_RANSAC;
-	else
-		return -EINVAL;
-	return 0;
+	int i, ret = parse_name(name, robust_names, 2, &i);
+	if (!ret)
+		*out = (enum mvod_robust_method)i;
+	return ret;
 }
 
 void mvod_vo_params_default(struct mvod_vo_params *p)
@@ -51,9 +93,11 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 	*p = (struct mvod_vo_params){
 		.resize = 1.0,
 		.blur_ksize = 0,
+		.detector = MVOD_DETECTOR_ORB,
 		.max_features = 2000,
+		.matcher = MVOD_MATCHER_BF,
 		.ratio = 0.8,
-		.cross_check = true,
+		.best_n = 200,
 		.robust = MVOD_ROBUST_MAGSAC,
 		.ransac_px = 1.0,
 		.ransac_conf = 0.999,
@@ -77,7 +121,7 @@ struct mvod_vo {
 	struct mvod_vo_params p;
 	struct mvod_camera cam; /* after preprocessing: pinhole, no distortion */
 	struct mvod_cv_preproc *pre;
-	struct mvod_cv_orb *orb;
+	struct mvod_cv_detector *det;
 	struct mvod_matcher *matcher;
 	int cap;
 	struct keyframe kf[2];
@@ -99,11 +143,12 @@ static double now_ms(void)
 	return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
 }
 
-static int keyframe_init(struct keyframe *k, int cap)
+static int keyframe_init(struct keyframe *k, int cap, int desc_bytes)
 {
 	k->f.cap = cap;
+	k->f.desc_bytes = desc_bytes;
 	k->f.kp = calloc((size_t)cap, sizeof(*k->f.kp));
-	k->f.desc = calloc((size_t)cap, MVOD_ORB_DESC_BYTES);
+	k->f.desc = calloc((size_t)cap, (size_t)desc_bytes);
 	k->pts = calloc((size_t)cap * 3, sizeof(double));
 	k->has_pt = calloc((size_t)cap, 1);
 	return k->f.kp && k->f.desc && k->pts && k->has_pt ? 0 : -ENOMEM;
@@ -132,7 +177,7 @@ static int alloc_buffers(struct mvod_vo *vo)
 	    !vo->scratch || !vo->mask)
 		return -ENOMEM;
 	for (int i = 0; i < 2; i++)
-		if (keyframe_init(&vo->kf[i], vo->cap))
+		if (keyframe_init(&vo->kf[i], vo->cap, mvod_cv_desc_bytes(vo->p.detector)))
 			return -ENOMEM;
 	return 0;
 }
@@ -144,15 +189,18 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 	if (!vo)
 		return -ENOMEM;
 	vo->p = *params;
-	/* ORB may return a few more than asked for; the cap leaves room for them. */
+	/* ORB and SIFT may return a few more than asked for (ties); the cap leaves room. */
 	vo->cap = params->max_features + params->max_features / 4 + 16;
 	int ret = mvod_cv_preproc_create(cam, params->resize, params->blur_ksize, &vo->cam, &vo->pre);
 	if (ret)
 		goto fail;
-	ret = mvod_cv_orb_create(params->max_features, vo->cam.width, vo->cam.height, &vo->orb);
+	ret = mvod_cv_detector_create(params->detector, params->max_features, vo->cam.width,
+				      vo->cam.height, &vo->det);
 	if (ret)
 		goto fail;
-	ret = mvod_matcher_create(vo->cap, &vo->matcher);
+	struct mvod_match_params mp = {params->matcher, params->detector, params->ratio,
+				       params->best_n};
+	ret = mvod_matcher_create(&mp, vo->cap, &vo->matcher);
 	if (ret)
 		goto fail;
 	ret = alloc_buffers(vo);
@@ -174,7 +222,7 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	if (!vo)
 		return;
 	mvod_cv_preproc_destroy(vo->pre);
-	mvod_cv_orb_destroy(vo->orb);
+	mvod_cv_detector_destroy(vo->det);
 	mvod_matcher_destroy(vo->matcher);
 	for (int i = 0; i < 2; i++)
 		keyframe_fini(&vo->kf[i]);
@@ -390,7 +438,7 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
 	if (ret)
 		return ret;
 	double t1 = now_ms();
-	ret = mvod_cv_orb_detect(vo->orb, &grey, &vo->cur->f);
+	ret = mvod_cv_detect(vo->det, &grey, &vo->cur->f);
 	if (ret)
 		return ret;
 	double t2 = now_ms();
@@ -401,8 +449,8 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
 	} else if (vo->cur->f.n < vo->p.min_matches) {
 		res->status = MVOD_FRAME_FEW_FEATURES;
 	} else {
-		ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->p.ratio,
-				    vo->p.cross_check, vo->matches, vo->cap, &res->matches);
+		ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches, vo->cap,
+				 &res->matches);
 		if (ret)
 			return ret;
 		res->status = MVOD_FRAME_FEW_MATCHES;

@@ -184,6 +184,59 @@ static void test_frame_err_pure_step(void **state)
 	assert_true(fabs(r.trans_pct_mean - 10) < 1e-9);
 }
 
+static void test_frame_err_pitch_is_not_heading(void **state)
+{
+	(void)state;
+	/*
+	 * The estimate pitches 0.5 deg per step more than the truth (about x) at the true
+	 * positions: the RPE sees the full 0.5 deg, r (the y Euler angle: heading) sees none. The
+	 * accumulated pitch error still tilts the estimated step: d = 2 sin(i a / 2), as for yaw.
+	 */
+	const double a = 0.5 * M_PI / 180;
+	struct mvod_pose g[6], e[6];
+	straight(g, 6, 0);
+	straight(e, 6, 0);
+	for (int i = 0; i < 6; i++) {
+		double w[3] = {a * i, 0, 0};
+		mvod_rot_exp(w, e[i].R);
+	}
+	for (int i = 1; i < 6; i++) {
+		struct mvod_frame_err fe;
+		mvod_frame_err(&e[i - 1], &e[i], &g[i - 1], &g[i], &fe);
+		assert_true(fe.r_deg < 1e-9);
+		assert_true(fabs(fe.d_m - 2 * sin(i * a / 2)) < 1e-12);
+	}
+	struct mvod_rpe r;
+	rpe_run(e, g, 6, &r);
+	assert_true(fabs(r.rot_deg_mean - 0.5) < 1e-9);
+}
+
+static void test_frame_err_scaled_copy(void **state)
+{
+	(void)state;
+	/*
+	 * Twice the truth's translations, same rotations (turning 0.02 rad per step): every
+	 * estimated step is 2 m for a 1 m true one, so d = 1 m, r = 0 and e = 1 / 1.5 on every
+	 * frame but the first; the RPE step error is 100 %.
+	 */
+	struct mvod_pose g[8], e[8];
+	straight(g, 8, 0.02);
+	straight(e, 8, 0.02);
+	for (int i = 0; i < 8; i++)
+		e[i].t[2] = 2.0 * i;
+	struct mvod_rpe r;
+	rpe_run(e, g, 8, &r);
+	assert_true(fabs(r.err_max - 1 / 1.5) < 1e-12);
+	assert_true(fabs(r.err_avg - 7 * (1 / 1.5) / 8) < 1e-12);
+	assert_true(r.rot_deg_max < 1e-9);
+	assert_true(fabs(r.trans_pct_mean - 100) < 1e-9);
+	/* Scaled down to metres (what the bench does with the Sim(3) scale), nothing is left. */
+	for (int i = 0; i < 8; i++)
+		e[i].t[2] *= 0.5;
+	rpe_run(e, g, 8, &r);
+	assert_true(r.err_max < 1e-12);
+}
+
 static void test_scaled_copy(void **state)
 {
 	(void)state;
@@ -292,6 +345,8 @@ int main(void)
 		cmocka_unit_test(test_euler_y_sign_and_range),
 		cmocka_unit_test(test_frame_err_pure_yaw),
 		cmocka_unit_test(test_frame_err_pure_step),
+		cmocka_unit_test(test_frame_err_pitch_is_not_heading),
+		cmocka_unit_test(test_frame_err_scaled_copy),
 		cmocka_unit_test(test_scaled_copy),
 		cmocka_unit_test(test_scale_drift_halved),
 		cmocka_unit_test(test_kitti_longer_steps),

@@ -1,4 +1,4 @@
-/* The top-down trajectory plot: a real PNG of the designed size, written atomically. */
+/* The top-down plot and the charts: real PNGs of the designed size, written atomically. */
 #include <dirent.h>
 #include <errno.h>
 #include <float.h>
@@ -248,6 +248,68 @@ static void test_unwritable(void **state)
 	rmdir(path);
 }
 
+/* A chart is 60 px of title, then per panel its plot area, 70 px of x axis and a 10 px gap. */
+static uint32_t chart_height(int panels)
+{
+	int plot_h = panels == 1 ? 640 : (780 / panels > 200 ? 780 / panels : 200);
+	return (uint32_t)(60 + panels * (plot_h + 70 + 10));
+}
+
+static void test_chart_panels(void **state)
+{
+	struct tmpdir *t = *state;
+	double x[50], y[50], y2[50];
+	for (int i = 0; i < 50; i++) {
+		x[i] = i;
+		y[i] = sin(0.2 * i);
+		y2[i] = 0.01 * i * i;
+	}
+	/* Gaps are left out, not drawn to the origin. */
+	y[10] = NAN;
+	y2[20] = INFINITY;
+	char path[128];
+	join(path, sizeof(path), t->dir, "chart1.png");
+	struct mvod_plot_series two[2] = {
+		{"sin", x, y, 50, MVOD_PLOT_LINE, NULL},
+		{"square", x, y2, 50, MVOD_PLOT_DASHED, NULL},
+	};
+	struct mvod_plot_panel one = {"frame", "value [m]", two, 2, false};
+	assert_int_equal(mvod_plot_chart(path, "one panel", &one, 1), 0);
+	assert_png(path, PLOT_W, chart_height(1));
+	struct mvod_plot_panel three[3] = {
+		{"frame", "a", &two[0], 1, false},
+		{"frame", "b", &two[1], 1, false},
+		{"frame", "empty", NULL, 0, false}};
+	join(path, sizeof(path), t->dir, "chart3.png");
+	assert_int_equal(mvod_plot_chart(path, "three panels", three, 3), 0);
+	assert_png(path, PLOT_W, chart_height(3));
+	assert_int_equal(count_hidden(t->dir), 0);
+}
+
+static void test_chart_labelled_points(void **state)
+{
+	struct tmpdir *t = *state;
+	const double x[3] = {12, 40, 130}, y[3] = {0.2, 0.15, 0.09};
+	const char *const labels[3] = {"orb bf-cross 1000", "orb bf 2000", "sift flann-ratio 3000"};
+	struct mvod_plot_series s = {"configuration", x, y, 3, MVOD_PLOT_POINTS, labels};
+	struct mvod_plot_panel p = {"median frame time [ms], log scale", "err_avg", &s, 1, true};
+	char path[128];
+	join(path, sizeof(path), t->dir, "points.png");
+	assert_int_equal(mvod_plot_chart(path, "error against speed", &p, 1), 0);
+	assert_png(path, PLOT_W, chart_height(1));
+	/* Bad arguments write nothing. */
+	struct mvod_plot_series bad = {"x", NULL, y, 3, MVOD_PLOT_LINE, NULL};
+	struct mvod_plot_panel bp = {"x", "y", &bad, 1, false};
+	join(path, sizeof(path), t->dir, "bad.png");
+	assert_int_equal(mvod_plot_chart(path, "t", &bp, 1), -EINVAL);
+	assert_int_equal(mvod_plot_chart(path, "t", &p, 0), -EINVAL);
+	assert_int_equal(mvod_plot_chart(NULL, "t", &p, 1), -EINVAL);
+	join(path, sizeof(path), t->dir, "noext");
+	assert_int_equal(mvod_plot_chart(path, "t", &p, 1), -EINVAL);
+	assert_int_equal(access(path, F_OK), -1);
+	assert_int_equal(count_hidden(t->dir), 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -257,6 +319,8 @@ int main(void)
 		cmocka_unit_test_setup_teardown(test_line_and_zigzag, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_bad_args, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_unwritable, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_chart_panels, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_chart_labelled_points, setup, teardown),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

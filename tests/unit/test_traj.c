@@ -76,22 +76,34 @@ static void test_kitti_round_trip(void **state)
 	round_trip(MVOD_TRAJ_KITTI, 1e-8);
 }
 
-static void test_load_errors(void **state)
+/* Loading a file of this text fails with -EINVAL and a message holding both needles. */
+static void expect_load_error(const char *text, const char *needle1, const char *needle2)
 {
-	(void)state;
 	char path[128], err[256] = "";
 	struct mvod_traj tr;
 	snprintf(path, sizeof(path), "%s/bad.txt", dir);
 	FILE *f = fopen(path, "w");
-	fputs("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0\n", f);
+	assert_non_null(f);
+	fputs(text, f);
 	fclose(f);
 	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
-	assert_non_null(strstr(err, "bad.txt:2"));
-	f = fopen(path, "w");
-	fputs("# only a comment\n\n", f);
-	fclose(f);
-	assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), -EINVAL);
-	assert_non_null(strstr(err, "no poses"));
+	if (!strstr(err, needle1) || !strstr(err, needle2))
+		fail_msg("expected '%s' and '%s' in: %s", needle1, needle2, err);
+}
+
+static void test_load_errors(void **state)
+{
+	(void)state;
+	/* The line, what the first line made it expect, and what it found instead. */
+	expect_load_error("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0\n",
+			  "bad.txt:2: expected 12 numbers (KITTI", "found 8");
+	expect_load_error("0.1 0 0 0 0 0 0 1\n0.2 0 0 0 0 0 one 1\n",
+			  "bad.txt:2: expected 8 numbers (TUM", "found text");
+	expect_load_error("0.1 0 0 0 0 0 0 1\n0.2 0 0 nan 0 0 0 1\n", "bad.txt:2",
+			  "found nan or inf");
+	expect_load_error("# only a comment\n\n", "bad.txt", "no poses");
+	struct mvod_traj tr;
+	char err[256];
 	assert_int_equal(mvod_traj_load("/nonexistent/x", &tr, err, sizeof(err)), -ENOENT);
 }
 

@@ -1,0 +1,295 @@
+/*
+ * mvod bench on an mvod-synth sequence with exact ground truth: one configuration's row in
+ * Markdown and CSV, the plots, a two-configuration sweep, and bad ground truth (each a message
+ * naming the file and what is wrong, and a non-zero exit).
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+
+#define FRAMES 40
+#define NCOLS 25
+
+static char dir[256], video[300], calib[300], gt_tum[300], gt_kitti[300];
+
+static int setup(void **state)
+{
+	(void)state;
+	snprintf(dir, sizeof(dir), "%s/seq", harness_tmpdir());
+	harness_synth(dir, "turn", FRAMES, "mkv", NULL);
+	snprintf(video, sizeof(video), "file:%s/video.mkv", dir);
+	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
+	snprintf(gt_tum, sizeof(gt_tum), "%s/gt.tum", dir);
+	snprintf(gt_kitti, sizeof(gt_kitti), "%s/gt.kitti", dir);
+	return 0;
+}
+
+static const char *tmp_path(const char *name)
+{
+	static char path[4][300];
+	static int k;
+	char *p = path[k++ % 4];
+	snprintf(p, 300, "%s/%s", harness_tmpdir(), name);
+	return p;
+}
+
+/* mvod bench on the sequence with gt and the given extra arguments (NULL-terminated). */
+static void bench(struct run_result *r, const char *gt, ...)
+{
+	char *argv[40] = {(char *)harness_bin("MVOD"), "bench", "--source", video, "--calib",
+			  calib, "--gt", (char *)gt};
+	int n = 8;
+	va_list ap;
+	va_start(ap, gt);
+	for (char *a; n < 39 && (a = va_arg(ap, char *));)
+		argv[n++] = a;
+	va_end(ap);
+	argv[n] = NULL;
+	assert_int_equal(harness_run(argv, r), 0);
+	assert_true(r->exited);
+}
+
+/* Splits a CSV file into rows of NCOLS cells; returns the data rows (header checked apart). */
+static int read_csv(const char *path, char cells[][NCOLS][40], int max_rows, char *header,
+		    size_t header_len)
+{
+	FILE *f = fopen(path, "r");
+	assert_non_null(f);
+	char line[4096];
+	assert_non_null(fgets(line, sizeof(line), f));
+	snprintf(header, header_len, "%s", line);
+	int rows = 0;
+	while (rows < max_rows && fgets(line, sizeof(line), f)) {
+		line[strcspn(line, "\n")] = '\0';
+		int c = 0;
+		for (char *save, *t = strtok_r(line, ",", &save); t; t = strtok_r(NULL, ",", &save)) {
+			assert_true(c < NCOLS);
+			snprintf(cells[rows][c++], 40, "%s", t);
+		}
+		assert_int_equal(c, NCOLS);
+		rows++;
+	}
+	fclose(f);
+	return rows;
+}
+
+/* Column index of name in a CSV header. */
+static int column(const char *header, const char *name)
+{
+	char h[4096];
+	snprintf(h, sizeof(h), "%s", header);
+	h[strcspn(h, "\n")] = '\0';
+	int c = 0;
+	for (char *save, *t = strtok_r(h, ",", &save); t; t = strtok_r(NULL, ",", &save), c++)
+		if (strcmp(t, name) == 0)
+			return c;
+	fail_msg("no column %s in %s", name, header);
+	return -1;
+}
+
+static int count_substr(const char *s, const char *needle)
+{
+	int n = 0;
+	for (const char *p = s; (p = strstr(p, needle)); p += strlen(needle))
+		n++;
+	return n;
+}
+
+static void read_text(const char *path, char *text, size_t len)
+{
+	FILE *f = fopen(path, "r");
+	assert_non_null(f);
+	size_t n = fread(text, 1, len - 1, f);
+	fclose(f);
+	text[n] = '\0';
+}
+
+static void test_one_configuration(void **state)
+{
+	(void)state;
+	const char *csv = tmp_path("one.csv"), *md = tmp_path("one.md"), *plots = tmp_path("plots");
+	struct run_result r;
+	bench(&r, gt_tum, "--scale", "gt", "--csv", csv, "--report", md, "--plots", plots, NULL);
+	if (r.status != 0)
+		fail_msg("mvod bench failed (%d): %s", r.status, r.err);
+	char cells[2][NCOLS][40], header[4096];
+	assert_int_equal(read_csv(csv, cells, 2, header, sizeof(header)), 1);
+	assert_int_equal(count_substr(header, ","), NCOLS - 1);
+	/* Every column has a value; only the KITTI ones may be "-" (a 4 m path is under 100 m). */
+	for (int c = 0; c < NCOLS; c++) {
+		assert_true(cells[0][c][0] != '\0');
+		if (c != column(header, "t_rel_pct") && c != column(header, "r_rel_deg_100m"))
+			assert_string_not_equal(cells[0][c], "-");
+	}
+	assert_string_equal(cells[0][column(header, "t_rel_pct")], "-");
+	assert_string_equal(cells[0][column(header, "detector")], "orb");
+	assert_int_equal(atoi(cells[0][column(header, "frames")]), FRAMES);
+	/*
+	 * Measured 0.045 (ORB 2000, 0.1 m steps on exact frames: r ~0.04 deg and d ~1 cm per
+	 * frame). 0.1 leaves room for other machines' ORB; a wrong step direction or a lost
+	 * track costs d of a whole 0.1 m step, e >= 0.17 on those frames, and lifts it past.
+	 */
+	double err_avg = atof(cells[0][column(header, "err_avg")]);
+	assert_true(err_avg > 0 && err_avg < 0.1);
+	/* The frame-time histogram's quantiles are ordered (values are not asserted: timing). */
+	double median = atof(cells[0][column(header, "frame_ms_median")]);
+	assert_true(median > 0 && median <= atof(cells[0][column(header, "frame_ms_p95")]));
+	/* With --scale gt every step has the true length: no drift, to rounding. */
+	assert_true(atof(cells[0][column(header, "scale_drift")]) > 0.99);
+	/* The same row on stdout and in the report, as Markdown: header, rule, row. */
+	assert_non_null(strstr(r.out, "| detector | matcher |"));
+	char text[8192];
+	read_text(md, text, sizeof(text));
+	assert_int_equal(count_substr(text, "\n"), 3);
+	assert_int_equal(count_substr(text, "| orb | bf |"), 1);
+	const char *pngs[] = {"path-top.png", "path-side.png", "errors.png"};
+	for (int i = 0; i < 3; i++) {
+		char p[400];
+		snprintf(p, sizeof(p), "%s/%s", plots, pngs[i]);
+		FILE *f = fopen(p, "rb");
+		assert_non_null(f);
+		unsigned char sig[8];
+		assert_int_equal(fread(sig, 1, 8, f), 8);
+		fclose(f);
+		assert_memory_equal(sig, "\x89PNG\r\n\x1a\n", 8);
+	}
+}
+
+static void test_sweep_two_configurations(void **state)
+{
+	(void)state;
+	const char *csv = tmp_path("sweep.csv"), *md = tmp_path("sweep.md");
+	struct run_result r;
+	bench(&r, gt_kitti, "--scale", "gt", "--features", "500", "--sweep",
+	      "detector=orb;matcher=bf-cross,bf-ratio", "--csv", csv, "--report", md, NULL);
+	if (r.status != 0)
+		fail_msg("mvod bench --sweep failed (%d): %s", r.status, r.err);
+	char cells[3][NCOLS][40], header[4096];
+	assert_int_equal(read_csv(csv, cells, 3, header, sizeof(header)), 2);
+	int m = column(header, "matcher"), e = column(header, "err_avg");
+	int f = column(header, "features");
+	/* Both configurations, the shared --features applied to each, sorted by err_avg. */
+	assert_true((strcmp(cells[0][m], "bf-cross best 200") == 0 &&
+		     strcmp(cells[1][m], "bf-ratio") == 0) ||
+		    (strcmp(cells[1][m], "bf-cross best 200") == 0 &&
+		     strcmp(cells[0][m], "bf-ratio") == 0));
+	assert_string_equal(cells[0][f], "500");
+	assert_string_equal(cells[1][f], "500");
+	assert_true(atof(cells[0][e]) <= atof(cells[1][e]));
+	char text[8192];
+	read_text(md, text, sizeof(text));
+	assert_int_equal(count_substr(text, "| orb | bf-"), 2);
+	assert_non_null(strstr(r.out, "| orb | bf-cross best 200 |"));
+	/* Each run was a process of its own, and said so. */
+	assert_non_null(strstr(r.err, "[2/2]"));
+}
+
+static const char *write_file(const char *name, const char *text)
+{
+	const char *p = tmp_path(name);
+	FILE *f = fopen(p, "w");
+	assert_non_null(f);
+	fputs(text, f);
+	fclose(f);
+	return p;
+}
+
+/* The first n lines of a file, with each line passed through edit (may be NULL). */
+static const char *head_of(const char *src, const char *name, int n, void (*edit)(char *line))
+{
+	FILE *in = fopen(src, "r");
+	assert_non_null(in);
+	static char text[65536];
+	size_t len = 0;
+	char line[1024];
+	for (int i = 0; i < n && fgets(line, sizeof(line), in); i++) {
+		if (edit)
+			edit(line);
+		len += (size_t)snprintf(text + len, sizeof(text) - len, "%s", line);
+	}
+	fclose(in);
+	return write_file(name, text);
+}
+
+/* Expects exit 1, needles on stderr, and no CSV written. */
+static void expect_bad_gt(const char *gt, const char *needle1, const char *needle2)
+{
+	const char *csv = tmp_path("bad.csv");
+	unlink(csv);
+	struct run_result r;
+	bench(&r, gt, "--csv", csv, NULL);
+	if (r.status != 1 || !strstr(r.err, needle1) || !strstr(r.err, needle2))
+		fail_msg("expected exit 1, '%s' and '%s'; got %d: %s", needle1, needle2, r.status,
+			 r.err);
+	assert_int_not_equal(access(csv, F_OK), 0);
+}
+
+static void shift_time(char *line)
+{
+	double t = atof(line);
+	char rest[512];
+	snprintf(rest, sizeof(rest), "%s", strchr(line, ' '));
+	snprintf(line, 1024, "%.6f%s", t + 100.0, rest);
+}
+
+static void test_bad_ground_truth(void **state)
+{
+	(void)state;
+	/* Shorter than the sequence, matched by index: says how many poses and which frame. */
+	const char *shortgt = head_of(gt_kitti, "short.kitti", 10, NULL);
+	expect_bad_gt(shortgt, "short.kitti has 10 poses", "frame 10 has none");
+	/* An unparseable row: the file and the line. */
+	const char *good = head_of(gt_kitti, "good.kitti", 2, NULL);
+	char text[4096];
+	FILE *f = fopen(good, "r");
+	assert_non_null(f);
+	size_t len = fread(text, 1, sizeof(text) - 200, f);
+	fclose(f);
+	snprintf(text + len, sizeof(text) - len, "1 0 0 x 0 1 0 0 0 0 1 0\n");
+	expect_bad_gt(write_file("garbled.kitti", text), "garbled.kitti:3", "found text");
+	/* Timestamps on another clock: the first frame has no pose near it, and the span says why. */
+	const char *later = head_of(gt_tum, "later.tum", FRAMES, shift_time);
+	expect_bad_gt(later, "later.tum", "no pose within 5 ms");
+}
+
+static void test_bad_usage(void **state)
+{
+	(void)state;
+	static const char *const cases[][2] = {
+		{"--sweep=detector=surf", "detector"},
+		{"--sweep=colour=red", "colour"},
+		{"--sweep=features", "key=value"},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		struct run_result r;
+		bench(&r, gt_kitti, cases[i][0], NULL);
+		assert_int_equal(r.status, 2);
+		assert_non_null(strstr(r.err, cases[i][1]));
+	}
+	/* No ground truth: nothing to measure against. */
+	char *argv[] = {(char *)harness_bin("MVOD"), "bench", "--source", video, "--calib", calib,
+			NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	assert_int_equal(r.status, 2);
+	assert_non_null(strstr(r.err, "--gt"));
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_one_configuration),
+		cmocka_unit_test(test_sweep_two_configurations),
+		cmocka_unit_test(test_bad_ground_truth),
+		cmocka_unit_test(test_bad_usage),
+	};
+	return cmocka_run_group_tests(tests, setup, harness_teardown);
+}
