@@ -23,6 +23,9 @@ struct mvod_run_opts {
 	enum mvod_traj_format traj_format;
 	const char *plot;       /* PNG, or NULL */
 	int64_t max_frames;     /* 0 = all */
+	double status_hz;       /* periodic mvod.status_t (and systemd STATUS=) rate. 1 */
+	/* Set (by SIGHUP) to have the run reopen its trajectory by name; cleared when done. */
+	volatile sig_atomic_t *reopen;
 	struct mvod_vo_params vo;
 };
 void mvod_run_opts_default(struct mvod_run_opts *o);
