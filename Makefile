@@ -8,7 +8,7 @@ DESTDIR  ?=
 # Exactly what the build, the tests and the demo need from Debian 12.
 DEBS := gcc g++ make pkg-config meson ninja-build \
 	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev libcmocka-dev \
-	libjpeg62-turbo-dev libcamera-dev zlib1g-dev
+	libjpeg62-turbo-dev libcamera-dev zlib1g-dev libinih-dev libsystemd-dev
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
@@ -67,10 +67,19 @@ demo: build
 bench: build
 	bench/run.sh $(BUILDDIR)
 
+# The binaries, LCM types, the systemd unit with its sysusers and tmpfiles entries (under
+# PREFIX/lib), the example config (PREFIX/share/mvod/mvod.conf.example), and that example as
+# /etc/mvod/mvod.conf when there is none yet: an edited config is never overwritten.
 install: build
 	meson configure $(BUILDDIR) --prefix=$(PREFIX)
 	meson compile -C $(BUILDDIR)
 	DESTDIR=$(DESTDIR) meson install -C $(BUILDDIR) --no-rebuild
+	@if [ ! -e $(DESTDIR)/etc/mvod/mvod.conf ]; then \
+		install -D -m 644 systemd/mvod.conf $(DESTDIR)/etc/mvod/mvod.conf && \
+		echo "make install: wrote $(DESTDIR)/etc/mvod/mvod.conf: set [source] and [calibration]"; \
+	fi
+	@echo "make install: then, as root: systemd-sysusers; systemd-tmpfiles --create;" \
+		"systemctl daemon-reload; systemctl enable --now mvod"
 
 clean:
 	rm -rf $(BUILDDIR) $(ASANDIR) $(DEMODIR)

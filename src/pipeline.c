@@ -13,6 +13,7 @@
 #include "mvod/eval.h"
 #include "mvod/log.h"
 #include "mvod/plot.h"
+#include "util/notify.h"
 
 /* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
 #define PATH_POINTS 20000
@@ -30,7 +31,7 @@
 
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
-	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM};
+	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM, .status_hz = 1};
 	mvod_vo_params_default(&o->vo);
 }
 
@@ -211,7 +212,11 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		st.stage_ms[k] = r->stage_total[k] / n;
-	mvod_ipc_publish_status(r->ipc, &st);
+	if (r->ipc)
+		mvod_ipc_publish_status(r->ipc, &st);
+	mvod_notify_status(r->status_due || r->state == MVOD_STATE_STOPPING,
+			   "%s, %.1f fps, %lld frames, %lld dropped", mvod_track_state_name(r->state),
+			   st.fps, (long long)st.frames, (long long)st.dropped);
 	r->last_status = now;
 	r->status_due = false;
 }
@@ -245,6 +250,11 @@ static double record_times(struct run *r, const struct mvod_vo_result *res)
 	}
 	hist_add(r->frame_hist, frame_ms);
 	return frame_ms;
+}
+
+static bool status_periodic_due(const struct run *r)
+{
+	return now_s() - r->last_status >= 1.0 / r->o->status_hz;
 }
 
 static int record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
@@ -284,11 +294,10 @@ static int record(struct run *r, const struct mvod_frame *f, const struct mvod_v
 
 static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
 {
-	if (r->ipc) {
+	if (r->ipc)
 		mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res);
-		if (r->status_due || now_s() - r->last_status >= 1.0)
-			publish_status(r, f, res);
-	}
+	if (r->status_due || status_periodic_due(r))
+		publish_status(r, f, res);
 	if (r->traj && !r->traj_failed) {
 		int ret = mvod_traj_writer_add(r->traj, f->utime / 1e6, &res->pose);
 		if (ret) {
@@ -335,6 +344,7 @@ static int process_frame(struct run *r, const struct mvod_frame *f, double captu
 	emit(r, f, &res);
 	r->last_frame = *f;
 	r->last_res = res;
+	mvod_notify_ready();
 	return ret;
 }
 
@@ -343,10 +353,33 @@ static bool stopped(const struct run *r, volatile sig_atomic_t *stop)
 	return (stop && *stop) || (r->o->max_frames && r->sum->frames >= r->o->max_frames);
 }
 
+/* Log rotation: the trajectory goes on in a new file under its name (SIGHUP). */
+static void reopen_outputs(struct run *r)
+{
+	*r->o->reopen = 0;
+	if (!r->traj)
+		return;
+	int ret = mvod_traj_writer_reopen(r->traj);
+	if (ret)
+		LOG(ERROR, "cannot reopen trajectory %s: %s; still writing to the file open before",
+		    r->o->trajectory, strerror(-ret));
+	else
+		LOG(INFO, "reopened trajectory %s", r->o->trajectory);
+}
+
+/* Between frames, in both loops: the watchdog sees the loop turn; a SIGHUP is acted on. */
+static void between_frames(struct run *r)
+{
+	mvod_notify_watchdog();
+	if (r->o->reopen && *r->o->reopen)
+		reopen_outputs(r);
+}
+
 static int loop(struct run *r, volatile sig_atomic_t *stop)
 {
 	int skipped = 0;
 	while (!stopped(r, stop)) {
+		between_frames(r);
 		struct mvod_frame f;
 		double t0 = now_s();
 		int ret = mvod_source_read(r->src, &f);
@@ -383,7 +416,8 @@ static void report_down(struct run *r)
 		LOG(INFO, "%s -> %s", mvod_track_state_name(r->state),
 		    mvod_track_state_name(MVOD_STATE_SOURCE_DOWN));
 	r->state = MVOD_STATE_SOURCE_DOWN;
-	if (r->ipc && (changed || now_s() - r->last_status >= 1.0))
+	r->status_due |= changed;
+	if (r->status_due || status_periodic_due(r))
 		publish_status(r, &r->last_frame, &r->last_res);
 }
 
@@ -415,6 +449,7 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 	r->src = NULL; /* the capture thread's now */
 	r->sum->live = true;
 	while (!stopped(r, stop)) {
+		between_frames(r);
 		struct mvod_frame f;
 		int epoch;
 		double t0 = now_s();
@@ -443,10 +478,11 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 /* The last status: what was processed and dropped in all, and that mvod is stopping. */
 static void report_stop(struct run *r)
 {
-	if (!r->ipc || !r->sum->frames)
-		return;
-	r->state = MVOD_STATE_STOPPING;
-	publish_status(r, &r->last_frame, &r->last_res);
+	if (r->sum->frames) {
+		r->state = MVOD_STATE_STOPPING;
+		publish_status(r, &r->last_frame, &r->last_res);
+	}
+	mvod_notify_stopping();
 }
 
 /*

@@ -1,6 +1,12 @@
-/* Logging: stderr in the foreground (the journal under systemd comes with the daemon issue). */
+/*
+ * Logging: one line per message on stderr, "mvod: LEVEL: text" in the foreground. Under
+ * systemd, when stderr is the journal, lines carry sd-daemon's "<N>" priority prefix instead,
+ * so journald records each line's priority.
+ */
 #ifndef MVOD_LOG_H
 #define MVOD_LOG_H
+
+#include <stdbool.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -17,6 +23,13 @@ void mvod_log_set_level(enum mvod_log_level level);
 enum mvod_log_level mvod_log_get_level(void);
 /* Parses "error", "warn", "info", "debug"; returns -EINVAL otherwise. */
 int mvod_log_parse_level(const char *name, enum mvod_log_level *out);
+/*
+ * Whether fd is the stream named by journal_stream (the JOURNAL_STREAM variable systemd sets:
+ * "DEVICE:INODE" of the journal's socket). Decided for stderr at the first message.
+ */
+bool mvod_log_is_journal(const char *journal_stream, int fd);
+/* Overrides that decision. */
+void mvod_log_set_journal(bool journal);
 void mvod_log(enum mvod_log_level level, const char *fmt, ...)
 	__attribute__((format(printf, 2, 3)));
 

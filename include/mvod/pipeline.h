@@ -36,6 +36,9 @@ struct mvod_run_opts {
 	int require_gt;         /* a frame without a ground-truth pose is an error (as --scale gt) */
 	mvod_frame_fn on_frame; /* or NULL */
 	void *on_frame_ctx;
+	double status_hz;       /* periodic mvod.status_t (and systemd STATUS=) rate. 1 */
+	/* Set (by SIGHUP) to have the run reopen its trajectory by name; cleared when done. */
+	volatile sig_atomic_t *reopen;
 	struct mvod_vo_params vo;
 };
 void mvod_run_opts_default(struct mvod_run_opts *o);

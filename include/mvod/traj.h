@@ -27,6 +27,11 @@ struct mvod_traj_writer;
 int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mvod_traj_writer **out);
 /* t in seconds (ignored by KITTI). */
 int mvod_traj_writer_add(struct mvod_traj_writer *w, double t, const struct mvod_pose *pose);
+/*
+ * Log rotation: opens the file by its name again (creating it, appending when it exists) and
+ * closes the old one after an fsync. On failure the old file stays in use.
+ */
+int mvod_traj_writer_reopen(struct mvod_traj_writer *w);
 /* fsyncs and closes; returns the first error seen by any add or the close. NULL is a no-op. */
 int mvod_traj_writer_close(struct mvod_traj_writer *w);
 

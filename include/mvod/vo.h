@@ -54,6 +54,8 @@ enum mvod_detector {
 	MVOD_DETECTOR_SIFT = 1, /* 128 floats: slower, more distinctive */
 };
 int mvod_detector_parse(const char *name, enum mvod_detector *out);
+/* The detectors' names in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_detector_names[];
 const char *mvod_detector_name(enum mvod_detector d);
 
 /*
@@ -70,6 +72,8 @@ enum mvod_matcher_kind {
 	MVOD_MATCHER_COUNT,
 };
 int mvod_matcher_kind_parse(const char *name, enum mvod_matcher_kind *out);
+/* The matchers' names in enum order, NULL-terminated. */
+extern const char *const mvod_matcher_names[];
 const char *mvod_matcher_kind_name(enum mvod_matcher_kind m);
 /* Whether the kind applies Lowe's ratio test (and so reads mvod_vo_params.ratio). */
 bool mvod_matcher_uses_ratio(enum mvod_matcher_kind m);

@@ -103,15 +103,9 @@ struct row {
 #define MAX_AXES 8
 #define MAX_CONFIGS 512
 
-/* Grid keys: the run options they set. */
-static const struct {
-	const char *key;
-	int id;
-} grid_keys[] = {
-	{"detector", CLI_OPT_DETECTOR}, {"matcher", CLI_OPT_MATCHER}, {"features", CLI_OPT_FEATURES},
-	{"ratio", CLI_OPT_RATIO},       {"best", CLI_OPT_BEST},       {"resize", CLI_OPT_RESIZE},
-	{"blur", CLI_OPT_BLUR},
-};
+/* Grid keys: run options (flags of the config table) that a sweep may vary. */
+static const char *const grid_keys[] = {"detector", "matcher", "features", "ratio",
+					"best",     "resize",  "blur"};
 #define GRID_KEYS ((int)(sizeof(grid_keys) / sizeof(grid_keys[0])))
 
 /* One axis of a sub-grid: an option and its values (pointers into the grid's copy). */
@@ -141,13 +135,18 @@ static int grid_error(const char *what, const char *text)
 /* Checks key=value with the very parser the option uses, so a typo fails before any run. */
 static int check_value(const char *key, const char *value)
 {
-	for (int k = 0; k < GRID_KEYS; k++) {
-		if (strcmp(key, grid_keys[k].key) != 0)
+	for (int g = 0; g < GRID_KEYS; g++) {
+		if (strcmp(key, grid_keys[g]) != 0)
 			continue;
-		struct mvod_run_opts scratch;
-		int quiet = 0;
-		mvod_run_opts_default(&scratch);
-		return cli_parse_shared(grid_keys[k].id, value, &scratch, &quiet);
+		for (int k = 0; k < mvod_config_nkeys; k++) {
+			if (strcmp(mvod_config_keys[k].flag, key) != 0)
+				continue;
+			struct mvod_config scratch;
+			mvod_config_default(&scratch);
+			int ret = cli_parse_key(k, value, &scratch);
+			mvod_config_fini(&scratch);
+			return ret;
+		}
 	}
 	return grid_error("unknown key (detector, matcher, features, ratio, best, resize, blur)",
 			  key);
@@ -218,7 +217,7 @@ static int parse_grid(char *grid_copy, struct sweep *sw)
 }
 
 struct bench {
-	struct mvod_run_opts run;
+	struct mvod_config cfg; /* the run options, from the same table as mvod run's */
 	const char *report, *csv, *plots, *grid;
 	int quiet;
 	int argc;
@@ -282,24 +281,27 @@ static void bench_free(struct bench *b)
 		free(b->argv[i]);
 	free(b->argv);
 	free(b->own_arg);
+	mvod_config_fini(&b->cfg);
 }
 
 /* 0 to run, 1 when help/version was printed, -EINVAL on a usage error. */
 static int parse_cli(int argc, char **argv, struct bench *b)
 {
-	mvod_run_opts_default(&b->run);
+	mvod_config_default(&b->cfg);
 	if (normalise_argv(b, argc, argv))
 		return -ENOMEM;
-	int ret = cli_getopt(b->argc, b->argv, bench_own_opts, parse_own, b, usage, &b->run,
+	int ret = cli_getopt(b->argc, b->argv, bench_own_opts, parse_own, b, usage, &b->cfg,
 			     &b->quiet);
 	if (ret)
 		return ret;
-	if (!b->run.source || !b->run.gt) {
+	mvod_config_finish(&b->cfg);
+	mvod_config_apply_log(&b->cfg);
+	if (!b->cfg.run.source || !b->cfg.run.gt) {
 		fprintf(stderr, "%s: --source URI and --gt FILE are required, e.g. --source "
 				"kitti:SEQDIR --gt poses.txt; see %s --help\n", cli_prog, cli_prog);
 		return -EINVAL;
 	}
-	b->run.require_gt = 1;
+	b->cfg.run.require_gt = 1;
 	if (!b->grid)
 		return 0;
 	b->grid_copy = strdup(b->grid);
@@ -598,7 +600,7 @@ static int run_plots(const struct bench *b, const struct collect *c, const struc
 		ret = -ENOMEM;
 		goto out;
 	}
-	align(pe, pg, c->n, b->run.vo.scale_mode == MVOD_SCALE_MODE_AUTO, c->est[c->n - 1].R,
+	align(pe, pg, c->n, b->cfg.run.vo.scale_mode == MVOD_SCALE_MODE_AUTO, c->est[c->n - 1].R,
 	      heading);
 	snprintf(title, sizeof(title), "%s %s, %s features: err_avg %s, ATE %s m",
 		 row->f[C_DETECTOR], row->f[C_MATCHER], row->f[C_FEATURES], row->f[C_ERR_AVG],
@@ -618,7 +620,7 @@ out:
 static int bench_one(const struct bench *b)
 {
 	struct collect c = {0};
-	struct mvod_run_opts o = b->run;
+	struct mvod_run_opts o = b->cfg.run;
 	o.on_frame = on_frame;
 	o.on_frame_ctx = &c;
 	struct mvod_run_summary s;

@@ -14,31 +14,8 @@
 
 const char *cli_prog = "mvod";
 
-/* Input and VO options: mvod run and mvod bench. */
-static const struct option run_opts[] = {
-	{"source", required_argument, NULL, CLI_OPT_SOURCE},
-	{"calib", required_argument, NULL, CLI_OPT_CALIB},
-	{"gt", required_argument, NULL, CLI_OPT_GT},
-	{"max-frames", required_argument, NULL, CLI_OPT_MAX_FRAMES},
-	{"scale", required_argument, NULL, CLI_OPT_SCALE},
-	{"detector", required_argument, NULL, CLI_OPT_DETECTOR},
-	{"matcher", required_argument, NULL, CLI_OPT_MATCHER},
-	{"features", required_argument, NULL, CLI_OPT_FEATURES},
-	{"ratio", required_argument, NULL, CLI_OPT_RATIO},
-	{"best", required_argument, NULL, CLI_OPT_BEST},
-	{"robust", required_argument, NULL, CLI_OPT_ROBUST},
-	{"ransac-px", required_argument, NULL, CLI_OPT_RANSAC_PX},
-	{"confidence", required_argument, NULL, CLI_OPT_CONFIDENCE},
-	{"min-parallax", required_argument, NULL, CLI_OPT_MIN_PARALLAX},
-	{"resize", required_argument, NULL, CLI_OPT_RESIZE},
-	{"blur", required_argument, NULL, CLI_OPT_BLUR},
-	{NULL, 0, NULL, 0},
-};
-
-/* Every subcommand. */
+/* Every subcommand; with the [log] keys of the config table. */
 static const struct option general_opts[] = {
-	{"log-level", required_argument, NULL, CLI_OPT_LOG_LEVEL},
-	{"quiet", no_argument, NULL, 'q'},
 	{"help", no_argument, NULL, 'h'},
 	{"version", no_argument, NULL, CLI_OPT_VERSION},
 	{NULL, 0, NULL, 0},
@@ -51,11 +28,22 @@ static int append(struct option *dst, int n, const struct option *src)
 	return n;
 }
 
+static bool is_general_key(const struct mvod_config_key *k)
+{
+	return strcmp(k->section, "log") == 0;
+}
+
 void cli_options_join(struct option *dst, bool with_run, const struct option *own)
 {
 	int n = append(dst, 0, general_opts);
-	if (with_run)
-		n = append(dst, n, run_opts);
+	for (int k = 0; k < mvod_config_nkeys && n < CLI_MAX_OPTIONS - 1; k++) {
+		const struct mvod_config_key *key = &mvod_config_keys[k];
+		if (with_run || is_general_key(key))
+			dst[n++] = (struct option){key->flag,
+						   key->type == MVOD_CONFIG_BOOL ? no_argument
+										 : required_argument,
+						   NULL, CLI_OPT_KEY + k};
+	}
 	n = append(dst, n, own);
 	dst[n] = (struct option){0};
 }
@@ -186,96 +174,42 @@ void cli_usage_general(FILE *out)
 "\n");
 }
 
-static int parse_vo_option(int id, const char *arg, struct mvod_vo_params *vo)
+int cli_parse_key(int k, const char *arg, struct mvod_config *cfg)
 {
-	long v = 0;
-	int ret = 0;
-	switch (id) {
-	case CLI_OPT_SCALE:
-		if (strcmp(arg, "auto") == 0)
-			vo->scale_mode = MVOD_SCALE_MODE_AUTO;
-		else if (strcmp(arg, "gt") == 0)
-			vo->scale_mode = MVOD_SCALE_MODE_GT;
-		else
-			ret = cli_bad_value("scale", arg, "auto or gt");
-		return ret;
-	case CLI_OPT_DETECTOR:
-		return mvod_detector_parse(arg, &vo->detector)
-			       ? cli_bad_value("detector", arg, "orb or sift")
-			       : 0;
-	case CLI_OPT_MATCHER:
-		return mvod_matcher_kind_parse(arg, &vo->matcher)
-			       ? cli_bad_value("matcher", arg,
-					       "bf, bf-cross, bf-ratio, flann or flann-ratio")
-			       : 0;
-	case CLI_OPT_FEATURES:
-		ret = cli_parse_int("features", arg, 50, 100000, &v);
-		vo->max_features = (int)v;
-		return ret;
-	case CLI_OPT_RATIO:
-		return cli_parse_double("ratio", arg, 0.1, 1.0, &vo->ratio);
-	case CLI_OPT_BEST:
-		ret = cli_parse_int("best", arg, 0, 100000, &v);
-		vo->best_n = (int)v;
-		return ret;
-	case CLI_OPT_ROBUST:
-		return mvod_robust_method_parse(arg, &vo->robust)
-			       ? cli_bad_value("robust", arg, "magsac or ransac")
-			       : 0;
-	case CLI_OPT_RANSAC_PX:
-		return cli_parse_double("ransac-px", arg, 0.05, 50, &vo->ransac_px);
-	case CLI_OPT_CONFIDENCE:
-		return cli_parse_double("confidence", arg, 0.5, 0.999999, &vo->ransac_conf);
-	case CLI_OPT_MIN_PARALLAX:
-		return cli_parse_double("min-parallax", arg, 0, 100, &vo->min_parallax_px);
-	case CLI_OPT_RESIZE:
-		return cli_parse_double("resize", arg, 0.05, 1, &vo->resize);
-	case CLI_OPT_BLUR:
-		ret = cli_parse_int("blur", arg, 0, 99, &v);
-		if (!ret && v != 0 && v % 2 == 0)
-			ret = cli_bad_value("blur", arg, "an odd kernel size, or 0");
-		vo->blur_ksize = (int)v;
-		return ret;
-	}
-	return -ENOENT;
+	char want[128];
+	if (mvod_config_set(cfg, k, arg, want, sizeof(want)) == 0)
+		return 0;
+	return cli_bad_value(mvod_config_keys[k].flag, arg, want);
 }
 
-int cli_parse_shared(int id, const char *arg, struct mvod_run_opts *o, int *quiet)
+/* Short options are the table's short flags (-q); getopt hands back the letter. */
+static int short_key(int id)
 {
-	long v;
-	switch (id) {
-	case CLI_OPT_SOURCE: o->source = arg; return 0;
-	case CLI_OPT_CALIB: o->calib = arg; return 0;
-	case CLI_OPT_GT: o->gt = arg; return 0;
-	case CLI_OPT_MAX_FRAMES:
-		if (cli_parse_int("max-frames", arg, 1, 1L << 40, &v))
-			return -EINVAL;
-		o->max_frames = v;
-		return 0;
-	case CLI_OPT_LOG_LEVEL: {
-		enum mvod_log_level lvl;
-		if (mvod_log_parse_level(arg, &lvl))
-			return cli_bad_value("log-level", arg, "error, warn, info or debug");
-		mvod_log_set_level(lvl);
-		return 0;
-	}
-	case 'q':
-		*quiet = 1;
-		mvod_log_set_level(MVOD_LOG_WARN);
-		return 0;
-	}
-	return parse_vo_option(id, arg, &o->vo);
+	for (int k = 0; k < mvod_config_nkeys; k++)
+		if (mvod_config_keys[k].short_flag && mvod_config_keys[k].short_flag == id)
+			return k;
+	return -1;
+}
+
+static int parse_option(int id, const char *arg, cli_own_parse_fn own_parse, void *ctx,
+			struct mvod_config *cfg)
+{
+	if (id >= CLI_OPT_OWN && own_parse)
+		return own_parse(id, arg, ctx);
+	int k = id >= CLI_OPT_KEY && id < CLI_OPT_KEY + mvod_config_nkeys ? id - CLI_OPT_KEY
+									    : short_key(id);
+	return k >= 0 ? cli_parse_key(k, arg, cfg) : -ENOENT;
 }
 
 int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
-		    void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet,
+		    void *ctx, void (*usage)(FILE *), struct mvod_config *cfg, int *quiet,
 		    const char **args, int nargs, const char *args_usage)
 {
 	struct option opts[CLI_MAX_OPTIONS];
-	cli_options_join(opts, o != NULL, own);
-	struct mvod_run_opts unused;
-	if (!o)
-		o = &unused;
+	cli_options_join(opts, cfg != NULL, own);
+	struct mvod_config general;
+	mvod_config_default(&general);
+	struct mvod_config *c = cfg ? cfg : &general;
 	int id;
 	opterr = 0;
 	optind = 1;
@@ -293,8 +227,7 @@ int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_par
 				cli_prog, argv[optind - 1], cli_prog);
 			return -EINVAL;
 		}
-		int ret = id >= CLI_OPT_OWN && own_parse ? own_parse(id, optarg, ctx)
-							   : cli_parse_shared(id, optarg, o, quiet);
+		int ret = parse_option(id, optarg, own_parse, ctx, c);
 		if (ret == -ENOENT) {
 			fprintf(stderr, "%s: option '%s' does not apply here; see %s --help\n",
 				cli_prog, argv[optind - 1], cli_prog);
@@ -315,13 +248,17 @@ int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_par
 	}
 	for (int i = 0; i < nargs; i++)
 		args[i] = argv[optind + i];
+	if (!cfg)
+		mvod_config_apply_log(&general);
+	if (quiet)
+		*quiet = c->quiet;
 	return 0;
 }
 
 int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
-	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet)
+	       void *ctx, void (*usage)(FILE *), struct mvod_config *cfg, int *quiet)
 {
-	return cli_getopt_args(argc, argv, own, own_parse, ctx, usage, o, quiet, NULL, 0, NULL);
+	return cli_getopt_args(argc, argv, own, own_parse, ctx, usage, cfg, quiet, NULL, 0, NULL);
 }
 
 /*

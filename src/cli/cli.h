@@ -9,7 +9,7 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-#include "mvod/pipeline.h"
+#include "mvod/config.h"
 
 #define EXIT_USAGE 2
 
@@ -33,19 +33,19 @@ void cli_quiet_libraries(void);
 /* The subcommand's name for messages ("mvod", "mvod calibrate", ...). */
 extern const char *cli_prog;
 
-/* Option ids of the shared groups; each command numbers its own from CLI_OPT_OWN. */
+/*
+ * Option ids: mvod_config_keys[k] is CLI_OPT_KEY + k (the flags of the config table); each
+ * command numbers its own from CLI_OPT_OWN.
+ */
 enum cli_opt_id {
-	CLI_OPT_SOURCE = 256, CLI_OPT_CALIB, CLI_OPT_GT, CLI_OPT_MAX_FRAMES,
-	CLI_OPT_SCALE, CLI_OPT_DETECTOR, CLI_OPT_MATCHER, CLI_OPT_FEATURES, CLI_OPT_RATIO,
-	CLI_OPT_BEST, CLI_OPT_ROBUST,
-	CLI_OPT_RANSAC_PX, CLI_OPT_CONFIDENCE, CLI_OPT_MIN_PARALLAX, CLI_OPT_RESIZE, CLI_OPT_BLUR,
-	CLI_OPT_LOG_LEVEL, CLI_OPT_VERSION,
+	CLI_OPT_VERSION = 255,
+	CLI_OPT_KEY = 256,
 	CLI_OPT_OWN = 512,
 };
 
 /*
- * Copies into dst the options of every command (--log-level -q -h --version), with_run the
- * input and VO options (--source --calib --gt --max-frames --scale --features ...), and a
+ * Copies into dst the options of every command (--log-level -q -h --version), with_run every
+ * other flag of the config table (--source --calib ... --trajectory --lcm-url ...), and a
  * command's own (terminated by a zero entry).
  */
 #define CLI_MAX_OPTIONS 64
@@ -57,25 +57,27 @@ void cli_usage_vo(FILE *out);
 void cli_usage_general(FILE *out);
 
 /*
- * Applies a shared option to o. Returns 0 when taken, -EINVAL on a bad value (already
- * reported), -ENOENT when id is not a shared option.
+ * Sets config key k from a flag's argument (NULL for a flag without one). Returns 0, or
+ * -EINVAL after printing "--flag VALUE: expected ...".
  */
-int cli_parse_shared(int id, const char *arg, struct mvod_run_opts *o, int *quiet);
+int cli_parse_key(int k, const char *arg, struct mvod_config *cfg);
 
 /*
- * The common getopt loop. own_parse handles the command's own ids (return 0 or -EINVAL). o
- * receives the input and VO options; NULL for commands that take none (calibrate, board).
+ * The common getopt loop. own_parse handles the command's own ids (return 0 or -EINVAL). cfg
+ * receives the config table's flags, marked as given in cfg->set, for the caller to lay over
+ * a config file and to apply [log]; NULL for commands without run options (calibrate, board),
+ * whose --log-level and -q take effect here and land in *quiet.
  * Returns 0 to go on, 1 after --help/--version, -EINVAL on a usage error (reported).
  */
 typedef int (*cli_own_parse_fn)(int id, const char *arg, void *ctx);
 int cli_getopt(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
-	       void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet);
+	       void *ctx, void (*usage)(FILE *), struct mvod_config *cfg, int *quiet);
 /*
  * The same for a command that takes exactly nargs operands (anywhere among the options): they
  * land in args[0..nargs-1]; a different count is a usage error naming args_usage ("IN and OUT").
  */
 int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_parse_fn own_parse,
-		    void *ctx, void (*usage)(FILE *), struct mvod_run_opts *o, int *quiet,
+		    void *ctx, void (*usage)(FILE *), struct mvod_config *cfg, int *quiet,
 		    const char **args, int nargs, const char *args_usage);
 
 /* Subcommands: argv[0] is the subcommand's name. Return the process exit status. */

@@ -8,23 +8,49 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <unistd.h>
+
 #include "mvod/capture.h"
 #include "mvod/ipc.h"
 #include "mvod/log.h"
 #include "mvod/pipeline.h"
+#include "util/notify.h"
 
-static volatile sig_atomic_t stop_requested;
+static volatile sig_atomic_t stop_requested, reopen_requested;
 
-static void on_signal(int sig)
+/*
+ * The first SIGINT or SIGTERM asks for a clean stop: the frame in hand is finished, outputs
+ * flushed and closed, a last status published. A second one ends mvod at once; that leaves
+ * nothing partial in the trajectory, whose every line is a single write(2).
+ */
+static void on_stop(int sig)
+{
+	if (stop_requested)
+		_exit(128 + sig);
+	stop_requested = 1;
+}
+
+static void on_hup(int sig)
 {
 	(void)sig;
-	stop_requested = 1;
+	reopen_requested = 1;
+}
+
+static void install_signals(void)
+{
+	/* No SA_RESTART for a stop: a blocking wait returns at once to look at the flag. */
+	struct sigaction stop = {.sa_handler = on_stop};
+	sigaction(SIGINT, &stop, NULL);
+	sigaction(SIGTERM, &stop, NULL);
+	struct sigaction hup = {.sa_handler = on_hup, .sa_flags = SA_RESTART};
+	sigaction(SIGHUP, &hup, NULL);
 }
 
 static void usage(FILE *out)
 {
 	fprintf(out,
 "Usage: mvod [run] --source URI [options]\n"
+"       mvod [run] --config FILE [options]\n"
 "       mvod --list-cameras\n"
 "       mvod calibrate|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
 "Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
@@ -38,9 +64,21 @@ static void usage(FILE *out)
 "  --no-lcm              do not publish over LCM\n"
 "  --pose-channel NAME   LCM channel of mvod.pose_t (default MVOD_POSE)\n"
 "  --status-channel NAME LCM channel of mvod.status_t (default MVOD_STATUS)\n"
+"  --status-rate HZ      mvod.status_t messages per second, 0.1 to 100 (default 1); also\n"
+"                        on every state change\n"
 "  --trajectory FILE     write every pose to FILE (complete lines only, even if killed)\n"
 "  --format tum|kitti    trajectory format (default: kitti for *.kitti, else tum)\n"
 "  --plot FILE.png       top-down plot of the path (with ground truth when --gt is given)\n"
+"\n"
+"Configuration:\n"
+"  --config FILE         read settings from an INI file (sections [source] [calibration]\n"
+"                        [vo] [lcm] [output] [log], one key per option above); flags\n"
+"                        override it. Without --config no file is read.\n"
+"  --print-config        print the settings in effect (file and flags) as such a file, then\n"
+"                        exit\n"
+"\n"
+"Signals: SIGTERM or SIGINT stop cleanly (a second one at once); SIGHUP reopens the\n"
+"trajectory file by name (log rotation).\n"
 "\n"
 "Cameras:\n"
 "  --list-cameras        list the V4L2 and libcamera cameras attached, their formats, sizes\n"
@@ -61,72 +99,70 @@ static void usage(FILE *out)
 "       --calib webcam.json --lcm-url memq://\n"
 "  mvod --source kitti:data/sequences/06 --gt data/poses/06.txt --scale gt \\\n"
 "       --trajectory out.kitti --format kitti --plot out.png --lcm-url memq://\n"
+"  mvod --config /etc/mvod/mvod.conf --log-level debug --print-config\n"
 "\n"
 "Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
 }
 
-enum run_opt_id {
-	OPT_LCM_URL = CLI_OPT_OWN, OPT_NO_LCM, OPT_POSE_CH, OPT_STATUS_CH, OPT_TRAJ, OPT_FORMAT,
-	OPT_PLOT, OPT_LIST_CAMERAS,
-};
+enum run_opt_id { OPT_CONFIG = CLI_OPT_OWN, OPT_PRINT_CONFIG, OPT_LIST_CAMERAS };
 
 static const struct option run_own_opts[] = {
-	{"lcm-url", required_argument, NULL, OPT_LCM_URL},
-	{"no-lcm", no_argument, NULL, OPT_NO_LCM},
-	{"pose-channel", required_argument, NULL, OPT_POSE_CH},
-	{"status-channel", required_argument, NULL, OPT_STATUS_CH},
-	{"trajectory", required_argument, NULL, OPT_TRAJ},
-	{"format", required_argument, NULL, OPT_FORMAT},
-	{"plot", required_argument, NULL, OPT_PLOT},
+	{"config", required_argument, NULL, OPT_CONFIG},
+	{"print-config", no_argument, NULL, OPT_PRINT_CONFIG},
 	{"list-cameras", no_argument, NULL, OPT_LIST_CAMERAS},
 	{NULL, 0, NULL, 0},
 };
 
 struct cli {
-	struct mvod_run_opts run;
-	const char *lcm_url, *pose_ch, *status_ch;
-	int no_lcm, quiet, format_given, list_cameras;
+	struct mvod_config flags; /* what the command line said */
+	const char *config;       /* --config FILE */
+	int print_config, list_cameras;
 };
 
 static int parse_own(int id, const char *arg, void *ctx)
 {
 	struct cli *c = ctx;
-	struct mvod_run_opts *r = &c->run;
 	switch (id) {
-	case OPT_LCM_URL: c->lcm_url = arg; return 0;
-	case OPT_NO_LCM: c->no_lcm = 1; return 0;
-	case OPT_POSE_CH: c->pose_ch = arg; return 0;
-	case OPT_STATUS_CH: c->status_ch = arg; return 0;
-	case OPT_TRAJ: r->trajectory = arg; return 0;
-	case OPT_FORMAT:
-		c->format_given = 1;
-		return mvod_traj_format_parse(arg, &r->traj_format)
-			       ? cli_bad_value("format", arg, "tum or kitti")
-			       : 0;
-	case OPT_PLOT: r->plot = arg; return 0;
+	case OPT_CONFIG: c->config = arg; return 0;
+	case OPT_PRINT_CONFIG: c->print_config = 1; return 0;
 	case OPT_LIST_CAMERAS: c->list_cameras = 1; return 0;
 	}
 	return -ENOENT;
 }
 
-/* 0 to run, 1 when help/version was printed, -EINVAL on a usage error. */
-static int parse_cli(int argc, char **argv, struct cli *c)
+/* The config file when there is one, the flags over it. -EINVAL after saying what is wrong. */
+static int load_config(struct cli *c, struct mvod_config *cfg)
 {
-	mvod_run_opts_default(&c->run);
-	int ret = cli_getopt(argc, argv, run_own_opts, parse_own, c, usage, &c->run, &c->quiet);
-	if (ret || c->list_cameras)
-		return ret;
-	if (!c->run.source) {
-		fprintf(stderr, "mvod: --source URI is required, e.g. --source file:video.mkv; "
-				"see mvod --help\n");
+	char err[512];
+	mvod_config_default(cfg);
+	if (c->config && mvod_config_load(c->config, cfg, err, sizeof(err))) {
+		fprintf(stderr, "%s: --config: %s\n", cli_prog, err);
 		return -EINVAL;
 	}
-	if (!c->format_given && c->run.trajectory && cli_has_suffix(c->run.trajectory, ".kitti"))
-		c->run.traj_format = MVOD_TRAJ_KITTI;
+	mvod_config_override(cfg, &c->flags);
+	mvod_config_finish(cfg);
+	mvod_config_apply_log(cfg);
 	return 0;
 }
 
-static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
+/* 0 to run, 1 when help/version was printed, -EINVAL on a usage error. */
+static int parse_cli(int argc, char **argv, struct cli *c, struct mvod_config *cfg)
+{
+	mvod_config_default(&c->flags);
+	int ret = cli_getopt(argc, argv, run_own_opts, parse_own, c, usage, &c->flags, NULL);
+	if (!ret)
+		ret = load_config(c, cfg);
+	if (ret || c->list_cameras || c->print_config)
+		return ret;
+	if (!cfg->run.source) {
+		fprintf(stderr, "mvod: --source URI is required, e.g. --source file:video.mkv (or "
+				"[source] uri in the --config file); see mvod --help\n");
+		return -EINVAL;
+	}
+	return 0;
+}
+
+static void print_summary(const struct mvod_config *c, const struct mvod_run_summary *s)
 {
 	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held",
 	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held);
@@ -152,34 +188,53 @@ static void print_summary(const struct cli *c, const struct mvod_run_summary *s)
 		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
 }
 
+static int print_config(const struct mvod_config *cfg)
+{
+	char err[256];
+	if (mvod_config_print(cfg, stdout, err, sizeof(err)) == 0)
+		return EXIT_SUCCESS;
+	fprintf(stderr, "%s: --print-config: %s\n", cli_prog, err);
+	return EXIT_USAGE;
+}
+
+static int run(struct mvod_config *cfg)
+{
+	install_signals();
+	mvod_notify_init();
+	struct mvod_ipc *ipc = NULL;
+	if (cfg->lcm_enabled &&
+	    mvod_ipc_create(cfg->lcm_url, cfg->pose_channel, cfg->status_channel, &ipc)) {
+		LOG(ERROR, "cannot open LCM at %s: check --lcm-url (e.g. memq://, "
+			   "udpm://239.255.76.67:7667?ttl=0, file:///tmp/log?mode=w)",
+		    cfg->lcm_url ? cfg->lcm_url : "the default URL");
+		return EXIT_FAILURE;
+	}
+	cfg->run.reopen = &reopen_requested;
+	struct mvod_run_summary sum;
+	int ret = mvod_run(&cfg->run, ipc, &stop_requested, &sum);
+	mvod_ipc_destroy(ipc);
+	if (!cfg->quiet && !ret)
+		print_summary(cfg, &sum);
+	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
+}
+
 int mvod_cmd_run(int argc, char **argv)
 {
 	struct cli c = {0};
-	int ret = parse_cli(argc, argv, &c);
-	if (ret)
-		return ret > 0 ? 0 : EXIT_USAGE;
-	cli_quiet_libraries();
-	if (c.list_cameras) {
-		mvod_capture_list_cameras(stdout);
-		return EXIT_SUCCESS;
+	struct mvod_config cfg;
+	mvod_config_default(&cfg);
+	int ret = parse_cli(argc, argv, &c, &cfg);
+	if (ret) {
+		ret = ret > 0 ? EXIT_SUCCESS : EXIT_USAGE;
+	} else if (c.print_config) {
+		ret = print_config(&cfg);
+	} else {
+		cli_quiet_libraries();
+		if (c.list_cameras)
+			mvod_capture_list_cameras(stdout);
+		ret = c.list_cameras ? EXIT_SUCCESS : run(&cfg);
 	}
-	struct sigaction sa = {.sa_handler = on_signal};
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
-	struct mvod_ipc *ipc = NULL;
-	if (!c.no_lcm) {
-		ret = mvod_ipc_create(c.lcm_url, c.pose_ch, c.status_ch, &ipc);
-		if (ret) {
-			LOG(ERROR, "cannot open LCM at %s: check --lcm-url (e.g. memq://, "
-				   "udpm://239.255.76.67:7667?ttl=0, file:///tmp/log?mode=w)",
-			    c.lcm_url ? c.lcm_url : "the default URL");
-			return EXIT_FAILURE;
-		}
-	}
-	struct mvod_run_summary sum;
-	ret = mvod_run(&c.run, ipc, &stop_requested, &sum);
-	mvod_ipc_destroy(ipc);
-	if (!c.quiet && !ret)
-		print_summary(&c, &sum);
-	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
+	mvod_config_fini(&cfg);
+	mvod_config_fini(&c.flags);
+	return ret;
 }

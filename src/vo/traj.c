@@ -32,6 +32,7 @@ struct mvod_traj_writer {
 	int fd;
 	int error; /* first failure, reported again at close */
 	enum mvod_traj_format fmt;
+	char *path; /* for reopening */
 };
 
 int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mvod_traj_writer **out)
@@ -39,14 +40,30 @@ int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mv
 	struct mvod_traj_writer *w = calloc(1, sizeof(*w));
 	if (!w)
 		return -ENOMEM;
-	w->fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+	w->path = strdup(path);
+	w->fd = w->path ? open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644) : -1;
 	if (w->fd < 0) {
-		int ret = -errno;
+		int ret = w->path ? -errno : -ENOMEM;
+		free(w->path);
 		free(w);
 		return ret;
 	}
 	w->fmt = fmt;
 	*out = w;
+	return 0;
+}
+
+int mvod_traj_writer_reopen(struct mvod_traj_writer *w)
+{
+	int fd = open(w->path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+	if (fd < 0)
+		return -errno;
+	/* The file rotated away is complete on disk before its successor gets a line. */
+	if (fsync(w->fd) != 0 && errno != EINVAL && !w->error)
+		w->error = -errno;
+	if (close(w->fd) != 0 && !w->error)
+		w->error = -errno;
+	w->fd = fd;
 	return 0;
 }
 
@@ -107,6 +124,7 @@ int mvod_traj_writer_close(struct mvod_traj_writer *w)
 		ret = -errno;
 	if (close(w->fd) != 0 && !ret)
 		ret = -errno;
+	free(w->path);
 	free(w);
 	return ret;
 }

@@ -47,10 +47,12 @@ static int parse_name(const char *name, const char *const *names, int n, int *ou
 	return -EINVAL;
 }
 
-static const char *const detector_names[] = {"orb", "sift"};
-static const char *const matcher_names[MVOD_MATCHER_COUNT] = {"bf", "bf-cross", "bf-ratio",
-							      "flann", "flann-ratio"};
-#define DETECTORS ((int)(sizeof(detector_names) / sizeof(detector_names[0])))
+const char *const mvod_detector_names[] = {"orb", "sift", NULL};
+const char *const mvod_matcher_names[MVOD_MATCHER_COUNT + 1] = {"bf", "bf-cross", "bf-ratio",
+								"flann", "flann-ratio", NULL};
+#define detector_names mvod_detector_names
+#define matcher_names mvod_matcher_names
+#define DETECTORS ((int)(sizeof(mvod_detector_names) / sizeof(mvod_detector_names[0])) - 1)
 
 int mvod_detector_parse(const char *name, enum mvod_detector *out)
 {

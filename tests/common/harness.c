@@ -12,6 +12,9 @@
 #include <unistd.h>
 
 #include <cmocka.h>
+#include <lcm/eventlog.h>
+
+#include "mvod_status_t.h"
 
 static char tmpdir[64];
 
@@ -108,6 +111,74 @@ int harness_run(char *const argv[], struct run_result *r)
 	r->exited = WIFEXITED(st);
 	r->status = r->exited ? WEXITSTATUS(st) : WTERMSIG(st);
 	return 0;
+}
+
+pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_path)
+{
+	pid_t pid = fork();
+	assert_true(pid >= 0);
+	if (pid == 0) {
+		int out = open(out_path ? out_path : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		int err = open(err_path ? err_path : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		dup2(out, 1);
+		dup2(err, 2);
+		execv(argv[0], argv);
+		_exit(127);
+	}
+	return pid;
+}
+
+int harness_wait(pid_t pid, int *status)
+{
+	int st;
+	while (waitpid(pid, &st, 0) < 0)
+		if (errno != EINTR)
+			fail_msg("waitpid: %s", strerror(errno));
+	*status = WIFEXITED(st) ? WEXITSTATUS(st) : WTERMSIG(st);
+	return WIFEXITED(st);
+}
+
+int harness_count_lines(const char *path)
+{
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return -1;
+	int n = 0, c;
+	while ((c = fgetc(f)) != EOF)
+		n += c == '\n';
+	fclose(f);
+	return n;
+}
+
+void harness_wait_lines(const char *path, int n, pid_t pid)
+{
+	int st;
+	while (harness_count_lines(path) < n) {
+		if (waitpid(pid, &st, WNOHANG) == pid)
+			fail_msg("the process ended (status %d) before %s had %d lines", st, path, n);
+		usleep(1000);
+	}
+}
+
+int harness_statuses(const char *log, mvod_status_t *out, int max)
+{
+	lcm_eventlog_t *ev = lcm_eventlog_create(log, "r");
+	if (!ev)
+		fail_msg("cannot read the LCM log %s", log);
+	int n = 0;
+	lcm_eventlog_event_t *e;
+	while ((e = lcm_eventlog_read_next_event(ev))) {
+		if (strcmp(e->channel, "MVOD_STATUS") == 0) {
+			mvod_status_t st;
+			assert_true(mvod_status_t_decode(e->data, 0, e->datalen, &st) > 0);
+			if (n < max)
+				out[n] = st;
+			n++;
+		}
+		lcm_eventlog_free_event(e);
+	}
+	lcm_eventlog_destroy(ev);
+	return n;
 }
 
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...)

@@ -3,6 +3,7 @@
 #define MVOD_TEST_HARNESS_H
 
 #include <stddef.h>
+#include <sys/types.h>
 
 #include "mvod/eval.h"
 #include "mvod/traj.h"
@@ -26,6 +27,18 @@ const char *harness_tmpdir(void);
 void harness_cleanup(void);
 /* A cmocka group teardown that calls harness_cleanup(). */
 int harness_teardown(void **state);
+/* Starts argv in the background, stdout and stderr into files (NULL: /dev/null). */
+pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_path);
+/* Waits for pid; 1 with its exit status in *status, or 0 with the signal that killed it. */
+int harness_wait(pid_t pid, int *status);
+/* Complete lines in a file, or -1 when it cannot be read. */
+int harness_count_lines(const char *path);
+/* Waits until path has at least n lines, failing the test if pid ends first. */
+void harness_wait_lines(const char *path, int n, pid_t pid);
+/* Reads the mvod.status_t messages of an LCM log: how many, the first max of them into out. */
+struct _mvod_status_t;
+int harness_statuses(const char *log, struct _mvod_status_t *out, int max);
+
 /* Renders a sequence with mvod-synth into dir; then extra arguments, NULL-terminated. */
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...);
 

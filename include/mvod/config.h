@@ -1,0 +1,104 @@
+/*
+ * mvod's settings: one table of keys drives the INI file (/etc/mvod/mvod.conf, libinih), the
+ * command-line flags of `mvod run` and `mvod --print-config`, so the three cannot drift apart.
+ */
+#ifndef MVOD_CONFIG_H
+#define MVOD_CONFIG_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "mvod/log.h"
+#include "mvod/pipeline.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * Everything `mvod run` is told. Strings are either borrowed (defaults, argv) or owned (read
+ * from a file); mvod_config_fini frees the owned ones, so a config is not to be copied by value.
+ */
+struct mvod_config {
+	struct mvod_run_opts run;
+	const char *lcm_url;        /* NULL: $LCM_DEFAULT_URL, then LCM's default */
+	const char *pose_channel;   /* MVOD_POSE */
+	const char *status_channel; /* MVOD_STATUS */
+	bool lcm_enabled;           /* true */
+	enum mvod_log_level log_level; /* info */
+	bool quiet;                 /* warnings and errors only, no summary. false */
+	uint64_t set;               /* bit i: mvod_config_keys[i] was given (file or flag) */
+	uint64_t owned;             /* bit i: the string of key i is ours to free */
+};
+
+enum mvod_config_type {
+	MVOD_CONFIG_STRING,
+	MVOD_CONFIG_INT,    /* int */
+	MVOD_CONFIG_INT64,  /* int64_t */
+	MVOD_CONFIG_DOUBLE,
+	MVOD_CONFIG_BOOL,   /* bool; its flag takes no value and sets flag_value */
+	MVOD_CONFIG_ENUM,   /* an enum whose values are the indices of choices */
+};
+
+/* One setting: where it lives in the file, its flag, its type and range, its field. */
+struct mvod_config_key {
+	const char *section, *key; /* INI */
+	const char *flag;          /* long option, without "--" */
+	char short_flag;           /* or 0 */
+	enum mvod_config_type type;
+	size_t offset;             /* of the field in struct mvod_config */
+	double lo, hi;             /* numbers: the accepted range */
+	bool odd;                  /* ints: odd, or 0 (kernel sizes) */
+	bool optional;             /* strings: empty means none (NULL) */
+	bool flag_value;           /* bools: what the flag sets */
+	const char *const *choices; /* enums, NULL-terminated, in enum order */
+};
+
+extern const struct mvod_config_key mvod_config_keys[];
+extern const int mvod_config_nkeys;
+
+/* Defaults: those of mvod_run_opts_default and the comments above. */
+void mvod_config_default(struct mvod_config *c);
+/* Frees the owned strings; c is then as after mvod_config_default. NULL is a no-op. */
+void mvod_config_fini(struct mvod_config *c);
+
+/*
+ * Sets key k from text (NULL for a bool's flag: flag_value). Strings are borrowed, for flags
+ * whose argv outlives the config. On a bad value returns -EINVAL and puts what was expected
+ * in err ("a number in [0.1, 1]"), for the caller to prefix with where the value came from.
+ */
+int mvod_config_set(struct mvod_config *c, int k, const char *text, char *err, size_t errlen);
+
+/*
+ * Parses INI text (len bytes, not necessarily NUL-terminated) over the defaults into out; name
+ * is the file name for messages. An unknown section or key, a bad value or a malformed line is
+ * -EINVAL with "NAME:LINE: ..." in err, naming the key, and out holds the defaults again. The
+ * last of repeated keys wins; leading whitespace is insignificant (no continuation lines);
+ * " ;" starts a comment; a line is at most MVOD_CONFIG_MAX_LINE characters.
+ */
+#define MVOD_CONFIG_MAX_LINE 198
+int mvod_config_parse_buffer(const char *name, const char *text, size_t len,
+			     struct mvod_config *out, char *err, size_t errlen);
+/* The same for a file (at most 1 MiB): a missing file is an error too. */
+int mvod_config_load(const char *path, struct mvod_config *out, char *err, size_t errlen);
+
+/* Keys given in src replace those in dst (flags over the file); owned strings move to dst. */
+void mvod_config_override(struct mvod_config *dst, struct mvod_config *src);
+/* Fills what follows from other keys: the trajectory format from a *.kitti name. */
+void mvod_config_finish(struct mvod_config *c);
+/* Sets the log level from [log] level and quiet. */
+void mvod_config_apply_log(const struct mvod_config *c);
+
+/*
+ * Writes c as an INI file that parses back to the same settings. A value INI cannot carry
+ * (a newline, " ;", surrounding blanks, a line too long) is -EINVAL naming the key in err.
+ */
+int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,497 @@
+#include "mvod/config.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <ini.h>
+
+#include "util/errbuf.h"
+
+/* Enum fields are written through an int. */
+_Static_assert(sizeof(enum mvod_scale_mode) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_robust_method) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_detector) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_matcher_kind) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_traj_format) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
+
+static const char *const scale_choices[] = {"auto", "gt", NULL};
+static const char *const robust_choices[] = {"magsac", "ransac", NULL};
+static const char *const format_choices[] = {"tum", "kitti", NULL};
+static const char *const level_choices[] = {"error", "warn", "info", "debug", NULL};
+
+#define AT(field) offsetof(struct mvod_config, field)
+#define STR(s, k, f, field) \
+	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_STRING, .offset = AT(field)}
+#define OPTSTR(s, k, f, field)                                                               \
+	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_STRING, .offset = AT(field), \
+	 .optional = true}
+#define NUM(s, k, t, field, l, h) \
+	{.section = s, .key = k, .flag = k, .type = t, .offset = AT(field), .lo = l, .hi = h}
+#define CHOICE(s, k, f, field, c) \
+	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_ENUM, .offset = AT(field), .choices = c}
+#define FLAG(s, k, f, field, v) \
+	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_BOOL, .offset = AT(field), .flag_value = v}
+
+/* The order here is the order of --print-config and of the example mvod.conf. */
+const struct mvod_config_key mvod_config_keys[] = {
+	OPTSTR("source", "uri", "source", run.source),
+	NUM("source", "max-frames", MVOD_CONFIG_INT64, run.max_frames, 0, 1e12),
+	OPTSTR("source", "gt", "gt", run.gt),
+	OPTSTR("calibration", "file", "calib", run.calib),
+	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
+	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
+	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names),
+	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000),
+	NUM("vo", "ratio", MVOD_CONFIG_DOUBLE, run.vo.ratio, 0.1, 1.0),
+	NUM("vo", "best", MVOD_CONFIG_INT, run.vo.best_n, 0, 100000),
+	CHOICE("vo", "robust", "robust", run.vo.robust, robust_choices),
+	NUM("vo", "ransac-px", MVOD_CONFIG_DOUBLE, run.vo.ransac_px, 0.05, 50),
+	NUM("vo", "confidence", MVOD_CONFIG_DOUBLE, run.vo.ransac_conf, 0.5, 0.999999),
+	NUM("vo", "min-parallax", MVOD_CONFIG_DOUBLE, run.vo.min_parallax_px, 0, 100),
+	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1),
+	{.section = "vo", .key = "blur", .flag = "blur", .type = MVOD_CONFIG_INT,
+	 .offset = AT(run.vo.blur_ksize), .lo = 0, .hi = 99, .odd = true},
+	FLAG("lcm", "enabled", "no-lcm", lcm_enabled, false),
+	OPTSTR("lcm", "url", "lcm-url", lcm_url),
+	STR("lcm", "pose-channel", "pose-channel", pose_channel),
+	STR("lcm", "status-channel", "status-channel", status_channel),
+	NUM("lcm", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz, 0.1, 100),
+	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
+	CHOICE("output", "format", "format", run.traj_format, format_choices),
+	OPTSTR("output", "plot", "plot", run.plot),
+	CHOICE("log", "level", "log-level", log_level, level_choices),
+	{.section = "log", .key = "quiet", .flag = "quiet", .short_flag = 'q',
+	 .type = MVOD_CONFIG_BOOL, .offset = AT(quiet), .flag_value = true},
+};
+const int mvod_config_nkeys = sizeof(mvod_config_keys) / sizeof(mvod_config_keys[0]);
+_Static_assert(sizeof(mvod_config_keys) / sizeof(mvod_config_keys[0]) <= 64,
+	       "set and owned are 64-bit masks");
+
+static void *field(struct mvod_config *c, const struct mvod_config_key *k)
+{
+	return (char *)c + k->offset;
+}
+
+static const void *cfield(const struct mvod_config *c, const struct mvod_config_key *k)
+{
+	return (const char *)c + k->offset;
+}
+
+void mvod_config_default(struct mvod_config *c)
+{
+	*c = (struct mvod_config){
+		.pose_channel = MVOD_DEFAULT_POSE_CHANNEL,
+		.status_channel = MVOD_DEFAULT_STATUS_CHANNEL,
+		.lcm_enabled = true,
+		.log_level = MVOD_LOG_INFO,
+	};
+	mvod_run_opts_default(&c->run);
+}
+
+static void drop_string(struct mvod_config *c, int k)
+{
+	if (c->owned & (1ULL << k))
+		free((void *)*(const char **)field(c, &mvod_config_keys[k]));
+	c->owned &= ~(1ULL << k);
+}
+
+void mvod_config_fini(struct mvod_config *c)
+{
+	if (!c)
+		return;
+	for (int k = 0; k < mvod_config_nkeys; k++)
+		drop_string(c, k);
+	mvod_config_default(c);
+}
+
+/* "a", "a or b", "a, b or c". */
+static void describe_choices(const char *const *ch, char *err, size_t errlen)
+{
+	size_t n = 0;
+	while (ch[n])
+		n++;
+	size_t used = 0;
+	for (size_t i = 0; i < n && used < errlen; i++) {
+		const char *sep = i == 0 ? "" : i + 1 == n ? " or " : ", ";
+		int w = snprintf(err + used, errlen - used, "%s%s", sep, ch[i]);
+		used += w > 0 ? (size_t)w : 0;
+	}
+}
+
+static int set_enum(const struct mvod_config_key *k, const char *text, int *out, char *err,
+		    size_t errlen)
+{
+	for (int i = 0; k->choices[i]; i++) {
+		if (strcmp(text, k->choices[i]) == 0) {
+			*out = i;
+			return 0;
+		}
+	}
+	describe_choices(k->choices, err, errlen);
+	return -EINVAL;
+}
+
+static int set_bool(const char *text, bool *out, char *err, size_t errlen)
+{
+	static const char *const yes[] = {"true", "yes", "on", "1"};
+	static const char *const no[] = {"false", "no", "off", "0"};
+	for (int i = 0; i < 4; i++) {
+		if (strcmp(text, yes[i]) == 0 || strcmp(text, no[i]) == 0) {
+			*out = strcmp(text, yes[i]) == 0;
+			return 0;
+		}
+	}
+	return mvod_errf(err, errlen, -EINVAL, "true or false");
+}
+
+static int set_number(const struct mvod_config_key *k, const char *text, void *dst, char *err,
+		      size_t errlen)
+{
+	char *end;
+	errno = 0;
+	bool integer = k->type != MVOD_CONFIG_DOUBLE;
+	double v = integer ? (double)strtoll(text, &end, 10) : strtod(text, &end);
+	if (errno || end == text || *end || !isfinite(v) || v < k->lo || v > k->hi)
+		return mvod_errf(err, errlen, -EINVAL, "%s in [%.15g, %.15g]",
+				 integer ? "an integer" : "a number", k->lo, k->hi);
+	if (k->odd && v != 0 && fmod(v, 2) == 0)
+		return mvod_errf(err, errlen, -EINVAL, "an odd number, or 0");
+	if (k->type == MVOD_CONFIG_INT)
+		*(int *)dst = (int)v;
+	else if (k->type == MVOD_CONFIG_INT64)
+		*(int64_t *)dst = (int64_t)v;
+	else
+		*(double *)dst = v;
+	return 0;
+}
+
+static int set_value(struct mvod_config *c, int ki, const char *text, char *err, size_t errlen)
+{
+	const struct mvod_config_key *k = &mvod_config_keys[ki];
+	void *dst = field(c, k);
+	switch (k->type) {
+	case MVOD_CONFIG_STRING:
+		if (!*text && !k->optional)
+			return mvod_errf(err, errlen, -EINVAL, "a non-empty value");
+		drop_string(c, ki);
+		*(const char **)dst = *text ? text : NULL;
+		return 0;
+	case MVOD_CONFIG_BOOL:
+		if (!text) {
+			*(bool *)dst = k->flag_value;
+			return 0;
+		}
+		return set_bool(text, dst, err, errlen);
+	case MVOD_CONFIG_ENUM:
+		return set_enum(k, text, dst, err, errlen);
+	default:
+		return set_number(k, text, dst, err, errlen);
+	}
+}
+
+int mvod_config_set(struct mvod_config *c, int k, const char *text, char *err, size_t errlen)
+{
+	int ret = set_value(c, k, text, err, errlen);
+	if (!ret)
+		c->set |= 1ULL << k;
+	return ret;
+}
+
+/* Parser state: inih hands lines to the handler; the reader counts them. */
+struct parse {
+	const char *name;
+	const char *p, *end; /* what is left of the text */
+	int line;            /* of the line last handed to inih */
+	int err_line;        /* of the first error the reader or the handler found, 0 if none */
+	char *err;
+	size_t errlen;
+	struct mvod_config *c;
+};
+
+static int key_index(const char *section, const char *key, bool *section_known)
+{
+	*section_known = false;
+	for (int k = 0; k < mvod_config_nkeys; k++) {
+		if (strcmp(section, mvod_config_keys[k].section) != 0)
+			continue;
+		*section_known = true;
+		if (strcmp(key, mvod_config_keys[k].key) == 0)
+			return k;
+	}
+	return -1;
+}
+
+/* "a, b, c": the keys of a section. */
+static const char *keys_of(const char *section, char *buf, size_t len)
+{
+	size_t used = 0;
+	buf[0] = '\0';
+	for (int k = 0; k < mvod_config_nkeys && used < len; k++) {
+		if (strcmp(section, mvod_config_keys[k].section) != 0)
+			continue;
+		int w = snprintf(buf + used, len - used, "%s%s", used ? ", " : "",
+				 mvod_config_keys[k].key);
+		used += w > 0 ? (size_t)w : 0;
+	}
+	return buf;
+}
+
+/* Keeps the first error only: "NAME:LINE: what". */
+__attribute__((format(printf, 2, 3))) static void parse_error(struct parse *ps, const char *fmt,
+							       ...)
+{
+	if (ps->err_line || !ps->errlen)
+		return;
+	ps->err_line = ps->line;
+	int n = snprintf(ps->err, ps->errlen, "%s:%d: ", ps->name, ps->line);
+	if (n < 0 || (size_t)n >= ps->errlen)
+		return;
+	va_list ap;
+	va_start(ap, fmt);
+	vsnprintf(ps->err + n, ps->errlen - (size_t)n, fmt, ap);
+	va_end(ap);
+}
+
+static int on_key(void *user, const char *section, const char *key, const char *value)
+{
+	struct parse *ps = user;
+	char known[256];
+	bool section_known;
+	int k = key_index(section, key, &section_known);
+	if (!*section) {
+		parse_error(ps, "%s: every key belongs in a section ([source], [vo], ...)", key);
+		return 0;
+	}
+	if (k < 0) {
+		if (section_known)
+			parse_error(ps, "[%s] %s: unknown key; [%s] has %s", section, key, section,
+				    keys_of(section, known, sizeof(known)));
+		else
+			parse_error(ps, "[%s] %s: unknown section; the sections are [source] "
+					"[calibration] [vo] [lcm] [output] [log]", section, key);
+		return 0;
+	}
+	char *copy = NULL;
+	if (mvod_config_keys[k].type == MVOD_CONFIG_STRING && *value && !(copy = strdup(value))) {
+		parse_error(ps, "[%s] %s: out of memory", section, key);
+		return 0;
+	}
+	char want[128];
+	if (mvod_config_set(ps->c, k, copy ? copy : value, want, sizeof(want))) {
+		free(copy);
+		parse_error(ps, "[%s] %s = %s: expected %s", section, key, value, want);
+		return 0;
+	}
+	if (copy)
+		ps->c->owned |= 1ULL << k;
+	return 1;
+}
+
+/*
+ * inih's reader: one line per call. Leading blanks go, since inih would take an indented line
+ * for the continuation of the key before it; a line that does not fit or holds a NUL ends the
+ * parse with an error, since inih would silently split or cut it.
+ */
+static char *next_line(char *str, int num, void *stream)
+{
+	struct parse *ps = stream;
+	if (ps->p >= ps->end || ps->err_line)
+		return NULL;
+	ps->line++;
+	const char *nl = memchr(ps->p, '\n', (size_t)(ps->end - ps->p));
+	const char *eol = nl ? nl + 1 : ps->end;
+	const char *s = ps->p;
+	while (s < eol && (*s == ' ' || *s == '\t'))
+		s++;
+	size_t n = (size_t)(eol - s);
+	ps->p = eol;
+	if (memchr(s, '\0', n)) {
+		parse_error(ps, "a NUL byte: not a text file");
+		return NULL;
+	}
+	if (n > (size_t)num - 1 || n > MVOD_CONFIG_MAX_LINE + 1) {
+		parse_error(ps, "line longer than %d characters", MVOD_CONFIG_MAX_LINE);
+		return NULL;
+	}
+	memcpy(str, s, n);
+	str[n] = '\0';
+	return str;
+}
+
+int mvod_config_parse_buffer(const char *name, const char *text, size_t len,
+			     struct mvod_config *out, char *err, size_t errlen)
+{
+	mvod_config_default(out);
+	struct parse ps = {.name = name, .p = text, .end = text + len, .err = err,
+			   .errlen = errlen, .c = out};
+	int ret = ini_parse_stream(next_line, &ps, on_key, &ps);
+	if (ret == 0 && !ps.err_line)
+		return 0;
+	/* inih reports the first bad line; when that is not one we explained, it is malformed. */
+	if (ret > 0 && (!ps.err_line || ret < ps.err_line)) {
+		ps.err_line = 0;
+		ps.line = ret;
+		parse_error(&ps, "not a [section] or key = value line");
+	}
+	mvod_config_fini(out);
+	return -EINVAL;
+}
+
+/* The whole file, NUL-terminated, at most max bytes. */
+static int slurp(const char *path, size_t max, char **buf, size_t *len, char *err, size_t errlen)
+{
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
+		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+	int ret = 0;
+	char *b = malloc(max + 1);
+	size_t n = 0;
+	ssize_t r = 0;
+	if (!b)
+		ret = mvod_errf(err, errlen, -ENOMEM, "%s: out of memory", path);
+	while (!ret && n <= max && (r = read(fd, b + n, max + 1 - n)) != 0) {
+		if (r < 0 && errno != EINTR)
+			ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path,
+					strerror(errno));
+		n += r > 0 ? (size_t)r : 0;
+	}
+	close(fd);
+	if (!ret && n > max)
+		ret = mvod_errf(err, errlen, -EFBIG, "%s: larger than %zu bytes: not a config file",
+				path, max);
+	if (ret) {
+		free(b);
+		return ret;
+	}
+	*buf = b;
+	*len = n;
+	return 0;
+}
+
+int mvod_config_load(const char *path, struct mvod_config *out, char *err, size_t errlen)
+{
+	char *text = NULL;
+	size_t len = 0;
+	mvod_config_default(out);
+	int ret = slurp(path, 1 << 20, &text, &len, err, errlen);
+	if (ret)
+		return ret;
+	ret = mvod_config_parse_buffer(path, text, len, out, err, errlen);
+	free(text);
+	return ret;
+}
+
+static const size_t field_size[] = {
+	[MVOD_CONFIG_STRING] = sizeof(const char *), [MVOD_CONFIG_INT] = sizeof(int),
+	[MVOD_CONFIG_INT64] = sizeof(int64_t),       [MVOD_CONFIG_DOUBLE] = sizeof(double),
+	[MVOD_CONFIG_BOOL] = sizeof(bool),           [MVOD_CONFIG_ENUM] = sizeof(int),
+};
+
+void mvod_config_override(struct mvod_config *dst, struct mvod_config *src)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++) {
+		uint64_t bit = 1ULL << k;
+		if (!(src->set & bit))
+			continue;
+		const struct mvod_config_key *key = &mvod_config_keys[k];
+		if (key->type == MVOD_CONFIG_STRING)
+			drop_string(dst, k);
+		memcpy(field(dst, key), cfield(src, key), field_size[key->type]);
+		dst->set |= bit;
+		dst->owned |= src->owned & bit;
+		src->owned &= ~bit;
+	}
+}
+
+static int key_of_field(size_t offset)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++)
+		if (mvod_config_keys[k].offset == offset)
+			return k;
+	return -1;
+}
+
+void mvod_config_finish(struct mvod_config *c)
+{
+	int fk = key_of_field(AT(run.traj_format));
+	size_t n = c->run.trajectory ? strlen(c->run.trajectory) : 0;
+	if (!(c->set & (1ULL << fk)) && n >= 6 && strcmp(c->run.trajectory + n - 6, ".kitti") == 0)
+		c->run.traj_format = MVOD_TRAJ_KITTI;
+}
+
+void mvod_config_apply_log(const struct mvod_config *c)
+{
+	enum mvod_log_level l = c->log_level;
+	mvod_log_set_level(c->quiet && l > MVOD_LOG_WARN ? MVOD_LOG_WARN : l);
+}
+
+/* The shortest text that reads back as exactly v: 0.8, not 0.80000000000000004. */
+static void format_double(double v, char *buf, size_t len)
+{
+	for (int digits = 15; digits <= 17; digits++) {
+		snprintf(buf, len, "%.*g", digits, v);
+		if (strtod(buf, NULL) == v)
+			return;
+	}
+}
+
+/* The value of key k as INI text, into buf. */
+static void format_value(const struct mvod_config *c, const struct mvod_config_key *k, char *buf,
+			 size_t len)
+{
+	const void *v = cfield(c, k);
+	switch (k->type) {
+	case MVOD_CONFIG_STRING: {
+		const char *s = *(const char *const *)v;
+		snprintf(buf, len, "%s", s ? s : "");
+		return;
+	}
+	case MVOD_CONFIG_INT: snprintf(buf, len, "%d", *(const int *)v); return;
+	case MVOD_CONFIG_INT64: snprintf(buf, len, "%lld", (long long)*(const int64_t *)v); return;
+	case MVOD_CONFIG_DOUBLE: format_double(*(const double *)v, buf, len); return;
+	case MVOD_CONFIG_BOOL: snprintf(buf, len, "%s", *(const bool *)v ? "true" : "false"); return;
+	case MVOD_CONFIG_ENUM: snprintf(buf, len, "%s", k->choices[*(const int *)v]); return;
+	}
+}
+
+/* Whether inih reads "key = value" back as value. */
+static const char *unprintable(const struct mvod_config_key *k, const char *value)
+{
+	size_t n = strlen(value);
+	if (strchr(value, '\n') || strchr(value, '\r'))
+		return "a line break";
+	if (strstr(value, " ;") || strstr(value, "\t;") || value[0] == ';')
+		return "\" ;\", which starts a comment in INI";
+	if (n && (value[0] == ' ' || value[0] == '\t' || value[n - 1] == ' ' || value[n - 1] == '\t'))
+		return "blanks around it";
+	if (strlen(k->key) + 3 + n > MVOD_CONFIG_MAX_LINE)
+		return "more characters than an INI line can hold";
+	return NULL;
+}
+
+int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t errlen)
+{
+	const char *section = "";
+	fprintf(out, "# mvod configuration (mvod --print-config); see mvod --help\n");
+	for (int i = 0; i < mvod_config_nkeys; i++) {
+		const struct mvod_config_key *k = &mvod_config_keys[i];
+		char value[4096];
+		format_value(c, k, value, sizeof(value));
+		const char *why = unprintable(k, value);
+		if (why)
+			return mvod_errf(err, errlen, -EINVAL, "[%s] %s: the value has %s", k->section,
+					 k->key, why);
+		if (strcmp(section, k->section) != 0)
+			fprintf(out, "%s[%s]\n", i ? "\n" : "", k->section);
+		section = k->section;
+		fprintf(out, "%s =%s%s\n", k->key, *value ? " " : "", value);
+	}
+	return ferror(out) ? mvod_errf(err, errlen, -EIO, "write error") : 0;
+}

@@ -1,0 +1,94 @@
+/*
+ * `meson install` into a DESTDIR, and the installed service files checked by systemd's own
+ * tools against that root: systemd-sysusers creates the mvod user (in group video),
+ * systemd-tmpfiles creates /var/lib/mvod owned by it, and `systemd-analyze verify` finds
+ * nothing to say about mvod.service (its ExecStart binary exists in the root). Exits 77 when
+ * systemd-analyze is not installed.
+ */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+
+static char root[300];
+
+/* Runs argv, failing the test with its output unless it exits 0 silently. */
+static void run_quiet(const char *what, char *const argv[])
+{
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status != 0 || r.err[0] || r.out[0])
+		fail_msg("%s: exit %d\n%s%s", what, r.status, r.out, r.err);
+}
+
+static void test_install_and_verify(void **state)
+{
+	(void)state;
+	snprintf(root, sizeof(root), "%s/root", harness_tmpdir());
+	char *install[] = {(char *)harness_bin("MESON"), "install", "-C",
+			   (char *)harness_bin("MVOD_BUILDDIR"), "--destdir", root, "--no-rebuild",
+			   "--quiet", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(install, &r), 0);
+	if (!r.exited || r.status)
+		fail_msg("meson install: %s%s", r.out, r.err);
+	/*
+	 * What the root needs besides mvod for the tools to judge it as a system: the units the
+	 * service depends on (sysinit.target, ...), /bin/kill of ExecReload, /etc for users.
+	 */
+	char cmd[2048];
+	snprintf(cmd, sizeof(cmd),
+		 "cd %s && mkdir -p lib/systemd bin etc && cp -r /lib/systemd/system lib/systemd/ "
+		 "&& cp /bin/kill bin/",
+		 root);
+	assert_int_equal(system(cmd), 0);
+	char rootopt[320];
+	snprintf(rootopt, sizeof(rootopt), "--root=%s", root);
+	char *sysusers[] = {"/usr/bin/systemd-sysusers", rootopt, NULL};
+	assert_int_equal(harness_run(sysusers, &r), 0);
+	assert_true(r.exited && r.status == 0);
+	char path[400], line[256];
+	snprintf(path, sizeof(path), "%s/etc/group", root);
+	FILE *f = fopen(path, "r");
+	assert_non_null(f);
+	int in_video = 0;
+	while (fgets(line, sizeof(line), f))
+		in_video |= strncmp(line, "video:", 6) == 0 && strstr(line, "mvod");
+	fclose(f);
+	assert_true(in_video);
+	if (geteuid() == 0) { /* chown to the new user needs root */
+		char *tmpfiles[] = {"/usr/bin/systemd-tmpfiles", rootopt, "--create", NULL};
+		run_quiet("systemd-tmpfiles", tmpfiles);
+		struct stat st;
+		snprintf(path, sizeof(path), "%s/var/lib/mvod", root);
+		assert_int_equal(stat(path, &st), 0);
+		assert_true(S_ISDIR(st.st_mode) && st.st_uid != 0);
+	}
+	char *verify[] = {"/usr/bin/systemd-analyze", "verify", rootopt, "mvod.service", NULL};
+	run_quiet("systemd-analyze verify", verify);
+	/* The example config, under whichever prefix the build was set up with. */
+	snprintf(cmd, sizeof(cmd), "find %s -path '*/share/mvod/mvod.conf.example' | grep -q .",
+		 root);
+	assert_int_equal(system(cmd), 0);
+}
+
+int main(void)
+{
+	if (access("/usr/bin/systemd-analyze", X_OK) != 0 ||
+	    access("/usr/bin/systemd-sysusers", X_OK) != 0) {
+		fprintf(stderr, "systemd-analyze or systemd-sysusers is not installed: skipped\n");
+		return EXIT_SKIP;
+	}
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_install_and_verify),
+	};
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
+}
