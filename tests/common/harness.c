@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
+#include <stdbool.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -12,6 +13,10 @@
 #include <unistd.h>
 
 #include <cmocka.h>
+#include <lcm/eventlog.h>
+
+#include "mvod/ipc.h"
+#include "mvod_pose_t.h"
 
 static char tmpdir[64];
 
@@ -165,4 +170,38 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 	free(pg);
 	mvod_traj_free(&est);
 	mvod_traj_free(&gt);
+}
+
+static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
+		       void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+{
+	if (strcmp(e->channel, MVOD_DEFAULT_POSE_CHANNEL) == 0) {
+		mvod_pose_t p;
+		bool ok = mvod_pose_t_decode(e->data, 0, e->datalen, &p) > 0;
+		c->bad += !ok || p.frame != c->last_frame + 1;
+		c->last_frame = ok ? p.frame : c->last_frame;
+		c->poses++;
+	} else if (strcmp(e->channel, MVOD_DEFAULT_STATUS_CHANNEL) == 0) {
+		bool ok = mvod_status_t_decode(e->data, 0, e->datalen, &c->last_status) > 0;
+		c->bad += !ok;
+		if (ok && on_status)
+			on_status(&c->last_status, ctx);
+		c->statuses++;
+	}
+}
+
+void harness_read_log(const char *path, struct log_contents *c,
+		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+{
+	memset(c, 0, sizeof(*c));
+	c->last_frame = -1;
+	lcm_eventlog_t *ev = lcm_eventlog_create(path, "r");
+	if (!ev)
+		fail_msg("cannot read the LCM log %s", path);
+	lcm_eventlog_event_t *e;
+	while ((e = lcm_eventlog_read_next_event(ev))) {
+		read_event(e, c, on_status, ctx);
+		lcm_eventlog_free_event(e);
+	}
+	lcm_eventlog_destroy(ev);
 }

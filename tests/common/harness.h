@@ -6,6 +6,7 @@
 
 #include "mvod/eval.h"
 #include "mvod/traj.h"
+#include "mvod_status_t.h"
 
 /* Exit code meson reads as "skipped". */
 #define EXIT_SKIP 77
@@ -39,5 +40,16 @@ struct traj_errors {
 	double max_translation; /* largest |t| of the estimate (drift of a static camera) */
 };
 void harness_compare(const char *est_path, const char *gt_path, int sim3, struct traj_errors *e);
+
+/* What a file:// LCM log written by mvod holds, on the default channels. */
+struct log_contents {
+	int poses, statuses;
+	int bad;            /* events that do not decode, and poses not numbered 0, 1, 2, ... */
+	int64_t last_frame; /* of the last pose, -1 without one */
+	mvod_status_t last_status;
+};
+/* Reads the whole log (failing the test if it cannot be opened); on_status may be NULL. */
+void harness_read_log(const char *path, struct log_contents *c,
+		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx);
 
 #endif
