@@ -178,7 +178,8 @@ static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
 	if (strcmp(e->channel, MVOD_DEFAULT_POSE_CHANNEL) == 0) {
 		mvod_pose_t p;
 		bool ok = mvod_pose_t_decode(e->data, 0, e->datalen, &p) > 0;
-		c->bad += !ok || p.frame != c->last_frame + 1;
+		c->bad += !ok;
+		c->gaps += ok && p.frame != c->last_frame + 1;
 		c->last_frame = ok ? p.frame : c->last_frame;
 		c->poses++;
 	} else if (strcmp(e->channel, MVOD_DEFAULT_STATUS_CHANNEL) == 0) {

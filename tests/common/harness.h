@@ -44,7 +44,8 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 /* What a file:// LCM log written by mvod holds, on the default channels. */
 struct log_contents {
 	int poses, statuses;
-	int bad;            /* events that do not decode, and poses not numbered 0, 1, 2, ... */
+	int bad;            /* events that do not decode */
+	int gaps;           /* poses not numbered one after the last (frames skipped before) */
 	int64_t last_frame; /* of the last pose, -1 without one */
 	mvod_status_t last_status;
 };

@@ -85,6 +85,22 @@ static int traj_lines(const char *path)
 	return n;
 }
 
+/*
+ * The LCM log decodes whole: n poses, numbered in order but for gaps where frames were
+ * skipped, and a last status saying mvod stopped, with faults.
+ */
+static void check_log(int n, int gaps, int32_t faults)
+{
+	struct log_contents c;
+	harness_read_log(lcmlog, &c, NULL, NULL);
+	assert_int_equal(c.bad, 0);
+	assert_int_equal(c.gaps, gaps);
+	assert_int_equal(c.poses, n);
+	assert_int_equal(c.last_status.state, MVOD_POSE_T_STATE_STOPPING);
+	assert_int_equal(c.last_status.frames, n);
+	assert_int_equal(c.last_status.faults, faults);
+}
+
 /* A video cut off mid-stream: the frames before it go out, then exit 1 saying so. */
 static void test_truncated_video(void **state)
 {
@@ -102,12 +118,7 @@ static void test_truncated_video(void **state)
 		fail_msg("expected exit 1 and one 'broke off' line, got %d: %s", r.status, r.err);
 	int n = traj_lines(traj);
 	assert_true(n > 0 && n < FRAMES);
-	struct log_contents c;
-	harness_read_log(lcmlog, &c, NULL, NULL);
-	assert_int_equal(c.bad, 0);
-	assert_int_equal(c.poses, n);
-	assert_int_equal(c.last_status.state, MVOD_POSE_T_STATE_STOPPING);
-	assert_int_equal(c.last_status.faults, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
+	check_log(n, 0, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
 }
 
 /* A copy of the PNG sequence in from, with frame 4 garbage and frame 7 an empty file. */
@@ -137,11 +148,7 @@ static void test_unreadable_frames_skipped(void **state)
 			 r.status, r.err);
 	assert_non_null(strstr(r.err, "frame 4"));
 	assert_int_equal(traj_lines(traj), 10);
-	struct log_contents c;
-	harness_read_log(lcmlog, &c, NULL, NULL);
-	assert_int_equal(c.poses, 10);
-	assert_int_equal(c.last_status.frames, 10);
-	assert_int_equal(c.last_status.faults, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+	check_log(10, 2, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 }
 
 /* A full disk: poses still go out over LCM, one error, and exit 1 for the incomplete file. */
@@ -152,11 +159,7 @@ static void test_trajectory_disk_full(void **state)
 	run_mvod(video, calib, "/dev/full", url, &r);
 	if (r.status != 1 || count(r.err, "No space left") != 1 || count(r.err, "\n") != 1)
 		fail_msg("expected exit 1 and one 'No space left' line, got %d: %s", r.status, r.err);
-	struct log_contents c;
-	harness_read_log(lcmlog, &c, NULL, NULL);
-	assert_int_equal(c.bad, 0);
-	assert_int_equal(c.poses, FRAMES);
-	assert_int_equal(c.last_status.faults, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
+	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
 }
 
 /* An LCM URL that names no provider, or a bad address: exit 1 naming it, before any output. */
@@ -207,13 +210,7 @@ static void test_sigterm_leaves_whole_outputs(void **state)
 	assert_int_equal(WEXITSTATUS(st), 0);
 	int n = traj_lines(traj);
 	assert_true(n >= at && n < 300);
-	struct log_contents c;
-	harness_read_log(lcmlog, &c, NULL, NULL);
-	assert_int_equal(c.bad, 0);
-	assert_int_equal(c.poses, n);
-	assert_int_equal(c.last_status.state, MVOD_POSE_T_STATE_STOPPING);
-	assert_int_equal(c.last_status.frames, n);
-	assert_int_equal(c.last_status.faults, 0);
+	check_log(n, 0, 0);
 }
 
 int main(void)

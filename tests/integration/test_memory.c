@@ -63,6 +63,7 @@ static void test_rss_flat_over_10000_frames(void **state)
 	struct log_contents c;
 	harness_read_log(log, &c, on_status, &rss);
 	assert_int_equal(c.bad, 0);
+	assert_int_equal(c.gaps, 0);
 	assert_int_equal(c.poses, FRAMES);
 	assert_int_equal(rss.last_frames, FRAMES);
 	assert_true(rss.early_frames >= EARLY && rss.early_frames < 2 * EARLY);
