@@ -404,12 +404,13 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 		}
 		if (ret == -ENODATA)
 			return 0;
-		if (ret) {
-			LOG(ERROR, "%s: reading frames failed: %s", r->o->source, strerror(-ret));
-			return ret;
-		}
+		if (ret)
+			return read_failed(r, ret);
 		if (epoch != r->epoch && (ret = restart_vo(r, epoch)))
 			return ret;
+		/* Logged by the capture thread; status carries it from this frame on. */
+		if (mvod_capture_saw_unreadable(r->cap))
+			fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 		r->sum->dropped += f.index - r->last_index - 1;
 		r->last_index = f.index;
 		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
