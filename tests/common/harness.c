@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
+#include <signal.h>
 #include <stdbool.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -113,6 +114,38 @@ int harness_run(char *const argv[], struct run_result *r)
 	r->exited = WIFEXITED(st);
 	r->status = r->exited ? WEXITSTATUS(st) : WTERMSIG(st);
 	return 0;
+}
+
+/* Lines in a file, or -1 when it cannot be read. */
+static int count_lines(const char *path)
+{
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return -1;
+	int n = 0, c;
+	while ((c = fgetc(f)) != EOF)
+		n += c == '\n';
+	fclose(f);
+	return n;
+}
+
+int harness_signal_after(char *const argv[], const char *path, int lines, int sig)
+{
+	pid_t pid = fork();
+	assert_true(pid >= 0);
+	if (pid == 0) {
+		execv(argv[0], argv);
+		_exit(127);
+	}
+	int st;
+	while (count_lines(path) < lines) {
+		if (waitpid(pid, &st, WNOHANG) == pid)
+			fail_msg("%s ended before the signal (status %d)", argv[0], st);
+		usleep(1000);
+	}
+	kill(pid, sig);
+	waitpid(pid, &st, 0);
+	return st;
 }
 
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...)

@@ -27,6 +27,11 @@ const char *harness_tmpdir(void);
 void harness_cleanup(void);
 /* A cmocka group teardown that calls harness_cleanup(). */
 int harness_teardown(void **state);
+/*
+ * Starts argv (NULL-terminated; output not captured), sends it sig once path holds at least
+ * lines lines, and returns its wait status; fails the test if it ends before.
+ */
+int harness_signal_after(char *const argv[], const char *path, int lines, int sig);
 /* Renders a sequence with mvod-synth into dir; then extra arguments, NULL-terminated. */
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...);
 

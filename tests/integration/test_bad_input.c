@@ -147,19 +147,6 @@ static void test_bad_option_values(void **state)
 	}
 }
 
-/* Lines in a file, or -1 when it cannot be read. */
-static int count_lines(const char *path)
-{
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return -1;
-	int n = 0, c;
-	while ((c = fgetc(f)) != EOF)
-		n += c == '\n';
-	fclose(f);
-	return n;
-}
-
 /* SIGKILL in the middle of a run leaves a trajectory whose every line parses. */
 static void test_killed_run_leaves_complete_lines(void **state)
 {
@@ -170,22 +157,10 @@ static void test_killed_run_leaves_complete_lines(void **state)
 	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
 	snprintf(cal, sizeof(cal), "%s/calib.json", dir);
 	snprintf(traj, sizeof(traj), "%s/killed.kitti", dir);
-	pid_t pid = fork();
-	assert_true(pid >= 0);
-	if (pid == 0) {
-		execl(harness_bin("MVOD"), "mvod", "--source", src, "--calib", cal, "--trajectory",
-		      traj, "--no-lcm", "-q", (char *)NULL);
-		_exit(127);
-	}
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--calib", cal,
+			"--trajectory", traj, "--no-lcm", "-q", NULL};
 	/* Kill as soon as a few poses are out, wherever the writer is. */
-	int st;
-	while (count_lines(traj) < 5) {
-		if (waitpid(pid, &st, WNOHANG) == pid)
-			fail_msg("mvod ended before it was killed (status %d)", st);
-		usleep(1000);
-	}
-	kill(pid, SIGKILL);
-	waitpid(pid, &st, 0);
+	int st = harness_signal_after(argv, traj, 5, SIGKILL);
 	assert_true(WIFSIGNALED(st));
 	struct mvod_traj t;
 	char err[256];

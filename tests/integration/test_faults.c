@@ -61,18 +61,6 @@ static void run_mvod(const char *source, const char *cal, const char *out, const
 		fail_msg("mvod killed by signal %d: %s", r->status, r->err);
 }
 
-/* Poses in a trajectory file so far, 0 while it is missing or empty. */
-static int poses_so_far(const char *path)
-{
-	struct mvod_traj t;
-	char err[512];
-	if (mvod_traj_load(path, &t, err, sizeof(err)))
-		return 0;
-	int n = t.n;
-	mvod_traj_free(&t);
-	return n;
-}
-
 /* Poses in a trajectory file, failing the test unless every line parses. */
 static int traj_lines(const char *path)
 {
@@ -205,21 +193,9 @@ static void test_sigterm_leaves_whole_outputs(void **state)
 	int at = 2 + rand() % 150;
 	printf("SIGTERM after %d poses (seed %u)\n", at, seed);
 	unlink(traj);
-	pid_t pid = fork();
-	assert_true(pid >= 0);
-	if (pid == 0) {
-		execl(harness_bin("MVOD"), "mvod", "--source", src, "--calib", cal, "--trajectory",
-		      traj, "--lcm-url", url, "-q", (char *)NULL);
-		_exit(127);
-	}
-	int st;
-	while (poses_so_far(traj) < at) {
-		if (waitpid(pid, &st, WNOHANG) == pid)
-			fail_msg("mvod ended before the signal (status %d)", st);
-		usleep(1000);
-	}
-	kill(pid, SIGTERM);
-	waitpid(pid, &st, 0);
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--calib", cal,
+			"--trajectory", traj, "--lcm-url", url, "-q", NULL};
+	int st = harness_signal_after(argv, traj, at, SIGTERM);
 	assert_true(WIFEXITED(st));
 	assert_int_equal(WEXITSTATUS(st), 0);
 	int n = traj_lines(traj);
