@@ -1,6 +1,9 @@
 # Thin wrapper around meson: the two commands a new user runs are `make demo` and `make test`.
 BUILDDIR ?= build
 ASANDIR  ?= build-asan
+FUZZDIR  ?= build-fuzz
+# Seconds of fuzzing per target: make fuzz (FUZZ_SECONDS=600 make fuzz for a long run).
+FUZZ_SECONDS ?= 60
 DEMODIR  ?= demo-out
 PREFIX   ?= /usr/local
 DESTDIR  ?=
@@ -8,11 +11,12 @@ DESTDIR  ?=
 # Exactly what the build, the tests and the demo need from Debian 12.
 DEBS := gcc g++ make pkg-config meson ninja-build \
 	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev libcmocka-dev \
-	libjpeg62-turbo-dev libcamera-dev zlib1g-dev libinih-dev libsystemd-dev
+	libjpeg62-turbo-dev libcamera-dev zlib1g-dev libinih-dev libsystemd-dev \
+	clang libclang-rt-14-dev valgrind
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps build test test-asan demo bench install clean
+.PHONY: all deps build test test-asan test-fuzz fuzz demo bench install clean
 
 all: build
 
@@ -36,20 +40,41 @@ $(ASANDIR)/build.ninja:
 	meson setup $(ASANDIR) -Dbuildtype=debugoptimized -Db_sanitize=address,undefined \
 		-Db_lundef=false
 
+# clang with libFuzzer: the library under AddressSanitizer and coverage, the targets linked to
+# libFuzzer's main. No camera backend is fuzzed, so libcamera stays out.
+$(FUZZDIR)/build.ninja:
+	CC=clang CXX=clang++ meson setup $(FUZZDIR) -Dfuzz=true -Dbuildtype=debugoptimized \
+		-Db_sanitize=address -Db_lundef=false -Dlibcamera=disabled \
+		-Dc_args=-fsanitize=fuzzer-no-link -Dcpp_args=-fsanitize=fuzzer-no-link
+
+# Whether clang can link a libFuzzer target here (clang and libclang-rt-14-dev installed).
+HAVE_LIBFUZZER = echo 'int LLVMFuzzerTestOneInput(const char *d, long n) { return 0; }' | \
+	clang -fsanitize=fuzzer -x c - -o /dev/null 2>/dev/null
+
 build: deps $(BUILDDIR)/build.ninja
 	meson compile -C $(BUILDDIR)
 
 # Every suite (unit, integration, data), then the unit and integration suites again under
-# AddressSanitizer and UndefinedBehaviorSanitizer.
+# AddressSanitizer and UndefinedBehaviorSanitizer, then each fuzz target for a few seconds.
 test: build
 	meson test -C $(BUILDDIR) --print-errorlogs
 	$(MAKE) --no-print-directory test-asan
+	$(MAKE) --no-print-directory test-fuzz
 
 test-asan: deps $(ASANDIR)/build.ninja
 	meson compile -C $(ASANDIR)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 		meson test -C $(ASANDIR) --suite unit --suite integration --print-errorlogs
+
+# The regression inputs of tests/fuzz/ and 3 s of fuzzing per target; skipped without clang.
+test-fuzz:
+	@if $(HAVE_LIBFUZZER); then $(MAKE) --no-print-directory fuzz FUZZ_SECONDS=3; \
+	else echo "test-fuzz: skipped: clang cannot link libFuzzer (make deps installs it)"; fi
+
+fuzz: deps $(FUZZDIR)/build.ninja
+	meson compile -C $(FUZZDIR)
+	MVOD_FUZZ_SECONDS=$(FUZZ_SECONDS) meson test -C $(FUZZDIR) --suite fuzz --print-errorlogs
 
 demo: build
 	@rm -rf $(DEMODIR) && mkdir -p $(DEMODIR)
@@ -82,4 +107,4 @@ install: build
 		"systemctl daemon-reload; systemctl enable --now mvod"
 
 clean:
-	rm -rf $(BUILDDIR) $(ASANDIR) $(DEMODIR)
+	rm -rf $(BUILDDIR) $(ASANDIR) $(FUZZDIR) $(DEMODIR)

@@ -14,6 +14,7 @@
 #include "mvod/log.h"
 #include "mvod/plot.h"
 #include "util/notify.h"
+#include "mvod_status_t.h"
 
 /* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
 #define PATH_POINTS 20000
@@ -58,7 +59,7 @@ struct run {
 	int epoch;                         /* times the live source came back */
 	int64_t last_index;                /* of the last frame processed, -1 before */
 	bool status_due;                   /* publish status with the next frame */
-	int traj_failed;
+	int32_t faults;                    /* mvod.status_t FAULT_ bits seen so far */
 	int plot_aligned; /* the plotted estimate was Sim(3)-aligned to the ground truth */
 };
 
@@ -192,6 +193,18 @@ static const struct mvod_pose *gt_for(const struct run *r, const struct mvod_fra
 	return fabs(r->gt.t[lo] - t) <= 0.005 ? &r->gt.pose[lo] : NULL;
 }
 
+/*
+ * Sets a fault bit; true the first time, when the caller logs it. Later occurrences are only
+ * in status, so a fault that repeats every frame does not flood the log.
+ */
+static bool fault(struct run *r, int32_t bit)
+{
+	bool first = !(r->faults & bit);
+	r->faults |= bit;
+	r->status_due |= first;
+	return first;
+}
+
 static void publish_status(struct run *r, const struct mvod_frame *f,
 			   const struct mvod_vo_result *res)
 {
@@ -209,11 +222,13 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 		.rss_kb = rss_kb(),
 		.uptime_s = now - r->t_start,
 		.state = r->state,
+		.faults = r->faults,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		st.stage_ms[k] = r->stage_total[k] / n;
-	if (r->ipc)
-		mvod_ipc_publish_status(r->ipc, &st);
+	if (r->ipc && mvod_ipc_publish_status(r->ipc, &st) && fault(r, MVOD_STATUS_T_FAULT_PUBLISH))
+		LOG(ERROR, "publishing status over LCM failed (the transport or log file refused "
+			   "it); mvod carries on, and says no more of it");
 	mvod_notify_status(r->status_due || r->state == MVOD_STATE_STOPPING,
 			   "%s, %.1f fps, %lld frames, %lld dropped", mvod_track_state_name(r->state),
 			   st.fps, (long long)st.frames, (long long)st.dropped);
@@ -294,18 +309,20 @@ static int record(struct run *r, const struct mvod_frame *f, const struct mvod_v
 
 static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
 {
-	if (r->ipc)
-		mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res);
+	if (r->ipc && mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res) &&
+	    fault(r, MVOD_STATUS_T_FAULT_PUBLISH))
+		LOG(ERROR, "frame %lld: publishing the pose over LCM failed (the transport or log "
+			   "file refused it); mvod carries on, and says no more of it",
+		    (long long)f->index);
 	if (r->status_due || status_periodic_due(r))
 		publish_status(r, f, res);
-	if (r->traj && !r->traj_failed) {
+	const int32_t traj_fault = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE;
+	if (r->traj && !(r->faults & traj_fault)) {
 		int ret = mvod_traj_writer_add(r->traj, f->utime / 1e6, &res->pose);
-		if (ret) {
-			/* Once, not per frame: poses keep flowing over LCM. */
-			LOG(ERROR, "trajectory %s: %s; no further poses are written to it",
-			    r->o->trajectory, strerror(-ret));
-			r->traj_failed = 1;
-		}
+		if (ret && fault(r, traj_fault))
+			LOG(ERROR, "trajectory %s: %s at frame %lld; it is incomplete from there on "
+				   "(poses still go out over LCM) and mvod will exit with status 1",
+			    r->o->trajectory, strerror(-ret), (long long)f->index);
 	}
 }
 
@@ -375,9 +392,32 @@ static void between_frames(struct run *r)
 		reopen_outputs(r);
 }
 
+/* One bad frame (undecodable, or of another size) is skipped, not fatal. */
+static void skip_unreadable(struct run *r, const struct mvod_frame *f)
+{
+	if (fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE))
+		LOG(WARN, "%s: frame %lld cannot be decoded at %dx%d (corrupt, empty or resized): "
+			  "skipped; later ones are skipped too, without a message", r->o->source,
+		    (long long)f->index, r->info.width, r->info.height);
+}
+
+/* A read that failed for good: the run ends with the reason. */
+static int read_failed(struct run *r, int ret)
+{
+	if (ret == -EIO) {
+		fault(r, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
+		LOG(ERROR, "%s broke off after %lld frames, before its announced end (a truncated "
+			   "or corrupt file?): the outputs hold the frames before", r->o->source,
+		    (long long)r->sum->frames);
+		return ret;
+	}
+	LOG(ERROR, "%s: reading frame %lld failed: %s", r->o->source, (long long)r->sum->frames,
+	    strerror(-ret));
+	return ret;
+}
+
 static int loop(struct run *r, volatile sig_atomic_t *stop)
 {
-	int skipped = 0;
 	while (!stopped(r, stop)) {
 		between_frames(r);
 		struct mvod_frame f;
@@ -388,17 +428,11 @@ static int loop(struct run *r, volatile sig_atomic_t *stop)
 		if (ret == -EAGAIN)
 			continue;
 		if (ret == -EINVAL) {
-			/* One bad frame (wrong size, undecodable image) is skipped, not fatal. */
-			if (skipped++ == 0)
-				LOG(WARN, "%s: skipping a frame that cannot be decoded at its size",
-				    r->o->source);
+			skip_unreadable(r, &f);
 			continue;
 		}
-		if (ret) {
-			LOG(ERROR, "%s: reading frame %lld failed: %s", r->o->source,
-			    (long long)r->sum->frames, strerror(-ret));
-			return ret;
-		}
+		if (ret)
+			return read_failed(r, ret);
 		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
 		if (ret)
 			return ret;
@@ -460,12 +494,13 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 		}
 		if (ret == -ENODATA)
 			return 0;
-		if (ret) {
-			LOG(ERROR, "%s: reading frames failed: %s", r->o->source, strerror(-ret));
-			return ret;
-		}
+		if (ret)
+			return read_failed(r, ret);
 		if (epoch != r->epoch && (ret = restart_vo(r, epoch)))
 			return ret;
+		/* Logged by the capture thread; status carries it from this frame on. */
+		if (mvod_capture_saw_unreadable(r->cap))
+			fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 		r->sum->dropped += f.index - r->last_index - 1;
 		r->last_index = f.index;
 		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
@@ -561,11 +596,11 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 			ret = pret;
 	}
 	int tret = mvod_traj_writer_close(r.traj);
-	if (tret && !r.traj_failed) {
+	if (tret && !(r.faults & MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE))
 		LOG(ERROR, "trajectory %s: %s", opts->trajectory, strerror(-tret));
-		if (!ret)
-			ret = tret;
-	}
+	/* An incomplete trajectory is a failed run, even though the poses went out over LCM. */
+	if (tret && !ret)
+		ret = tret;
 	mvod_path_fini(&r.est_path);
 	mvod_path_fini(&r.gt_path);
 	mvod_vo_destroy(r.vo);

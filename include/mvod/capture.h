@@ -93,6 +93,8 @@ int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame 
 		      int *epoch);
 /* The source is down and being reopened. */
 bool mvod_capture_down(struct mvod_capture *c);
+/* A frame could not be decoded and was skipped (the capture thread logged it, once). */
+bool mvod_capture_saw_unreadable(struct mvod_capture *c);
 /* Stops the thread promptly (even while reopening), closes the source, frees. NULL: no-op. */
 void mvod_capture_stop(struct mvod_capture *c);
 

@@ -24,6 +24,7 @@ struct mvod_status {
 	int64_t rss_kb;
 	double uptime_s;
 	enum mvod_track_state state;
+	int32_t faults; /* mvod.status_t FAULT_ bits */
 };
 
 struct mvod_ipc;

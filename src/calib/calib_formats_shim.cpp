@@ -1,6 +1,7 @@
 /* OpenCV FileStorage YAML/XML and ROS camera_info YAML, read and written with cv::FileStorage. */
 #include "mvod/calib.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -21,6 +22,37 @@ bool has_opencv_syntax(const char *text)
 {
 	const char *p = text + std::strspn(text, " \t\r\n");
 	return std::strncmp(p, "%YAML:", 6) == 0 || *p == '<';
+}
+
+/* A line of only spaces, tabs and a carriage return (len bytes at p). */
+bool blank(const char *p, size_t len)
+{
+	return std::strspn(p, " \t\r") >= len;
+}
+
+/*
+ * Whether YAML text has the shape of every calibration file: directives ("%YAML:1.0"), an
+ * optional "---" line, then a map whose keys start lines (with a letter or '_'); deeper
+ * lines indented. OpenCV 4.6's YAML parser loops forever when its top-level collection ends
+ * before the end of the text and a line starting with '-' follows (fuzzing found
+ * " -L-\n-\n " and "...\n-x"): text of another shape never reaches it.
+ */
+bool yaml_shape_ok(const char *text)
+{
+	bool header = true;
+	for (const char *p = text; *p;) {
+		size_t len = std::strcspn(p, "\n");
+		if (!blank(p, len) && p[0] != '#') {
+			bool directive = header && (p[0] == '%' ||
+						    (std::strncmp(p, "---", 3) == 0 && blank(p + 3, len - 3)));
+			if (!directive && (header || p[0] != ' ') && !std::isalpha((unsigned char)p[0]) &&
+			    p[0] != '_')
+				return false;
+			header = directive;
+		}
+		p += len + (p[len] == '\n');
+	}
+	return true;
 }
 
 /* A matrix node: rows, cols and rows*cols finite numbers in data. Both OpenCV's
@@ -119,6 +151,9 @@ extern "C" int mvod_calib_parse_filestorage(const char *text, struct mvod_camera
 					    enum mvod_calib_format *fmt, char *err, size_t errlen)
 {
 	const bool opencv = has_opencv_syntax(text);
+	if (*(text + std::strspn(text, " \t\r\n")) != '<' && !yaml_shape_ok(text))
+		return mvod_errf(err, errlen, -EINVAL, "malformed OpenCV/ROS calibration file: "
+				 "expected a map of keys (camera_matrix: ...), each at the start of a line");
 	int ret = mvod_guarded([&] {
 		cv::FileStorage fs;
 		try {

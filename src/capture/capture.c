@@ -27,7 +27,7 @@ struct mvod_capture {
 	int backoff_ms;
 	int64_t base;                 /* added to the source's indices: a reopened one starts at 0 */
 	int64_t last;                 /* index of the last frame posted */
-	bool warned_bad;
+	atomic_bool saw_bad; /* a frame could not be decoded (logged once, here) */
 };
 
 static bool stopping(struct mvod_capture *c)
@@ -115,10 +115,9 @@ static int step(struct mvod_capture *c)
 	int ret = mvod_source_read(c->src, &f);
 	if (ret == 0)
 		deliver(c, &f);
-	if (ret == -EINVAL && !c->warned_bad)
+	if (ret == -EINVAL && !atomic_exchange(&c->saw_bad, true))
 		LOG(WARN, "%s: skipping frames that cannot be decoded at their size (counted as "
 			  "dropped)", c->uri);
-	c->warned_bad |= ret == -EINVAL;
 	if (ret != -ENODEV)
 		return ret;
 	lose(c);
@@ -191,6 +190,11 @@ int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame 
 bool mvod_capture_down(struct mvod_capture *c)
 {
 	return atomic_load(&c->down);
+}
+
+bool mvod_capture_saw_unreadable(struct mvod_capture *c)
+{
+	return atomic_load(&c->saw_bad);
 }
 
 void mvod_capture_stop(struct mvod_capture *c)

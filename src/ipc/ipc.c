@@ -154,6 +154,7 @@ int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
 		.dropped_frames = st->dropped,
 		.rss_kb = st->rss_kb,
 		.uptime_s = st->uptime_s,
+		.faults = st->faults,
 	};
 
 	int len = mvod_status_t_encode(ipc->status_buf, 0, ipc->status_len, &msg);

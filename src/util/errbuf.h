@@ -8,7 +8,10 @@
 extern "C" {
 #endif
 
-/* Formats the reason into err (when err is non-NULL and errlen > 0) and returns code. */
+/*
+ * Formats the reason into err (when err is non-NULL and errlen > 0), control characters as
+ * spaces, and returns code.
+ */
 int mvod_errf(char *err, size_t errlen, int code, const char *fmt, ...)
 	__attribute__((format(printf, 4, 5)));
 

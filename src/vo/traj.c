@@ -267,8 +267,13 @@ void mvod_traj_free(struct mvod_traj *traj)
 int mvod_path_init(struct mvod_path *p, int cap)
 {
 	*p = (struct mvod_path){.cap = cap < 2 ? 2 : cap, .stride = 1};
-	p->xyz = malloc((size_t)p->cap * 3 * sizeof(double));
-	return p->xyz ? 0 : -ENOMEM;
+	size_t size = (size_t)p->cap * 3 * sizeof(double);
+	p->xyz = malloc(size);
+	if (!p->xyz)
+		return -ENOMEM;
+	/* Touched now, so that resident memory holds still while the path fills up. */
+	memset(p->xyz, 0, size);
+	return 0;
 }
 
 void mvod_path_add(struct mvod_path *p, const double xyz[3])

@@ -3,6 +3,8 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
+#include <signal.h>
+#include <stdbool.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -15,6 +17,8 @@
 #include <lcm/eventlog.h>
 
 #include "mvod_status_t.h"
+#include "mvod/ipc.h"
+#include "mvod_pose_t.h"
 
 static char tmpdir[64];
 
@@ -181,6 +185,18 @@ int harness_statuses(const char *log, mvod_status_t *out, int max)
 	return n;
 }
 
+int harness_signal_after(char *const argv[], const char *path, int lines, int sig)
+{
+	pid_t pid = harness_spawn(argv, NULL, NULL);
+	harness_wait_lines(path, lines, pid);
+	kill(pid, sig);
+	int st;
+	while (waitpid(pid, &st, 0) < 0)
+		if (errno != EINTR)
+			fail_msg("waitpid: %s", strerror(errno));
+	return st;
+}
+
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...)
 {
 	char nframes[16];
@@ -236,4 +252,39 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 	free(pg);
 	mvod_traj_free(&est);
 	mvod_traj_free(&gt);
+}
+
+static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
+		       void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+{
+	if (strcmp(e->channel, MVOD_DEFAULT_POSE_CHANNEL) == 0) {
+		mvod_pose_t p;
+		bool ok = mvod_pose_t_decode(e->data, 0, e->datalen, &p) > 0;
+		c->bad += !ok;
+		c->gaps += ok && p.frame != c->last_frame + 1;
+		c->last_frame = ok ? p.frame : c->last_frame;
+		c->poses++;
+	} else if (strcmp(e->channel, MVOD_DEFAULT_STATUS_CHANNEL) == 0) {
+		bool ok = mvod_status_t_decode(e->data, 0, e->datalen, &c->last_status) > 0;
+		c->bad += !ok;
+		if (ok && on_status)
+			on_status(&c->last_status, ctx);
+		c->statuses++;
+	}
+}
+
+void harness_read_log(const char *path, struct log_contents *c,
+		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+{
+	memset(c, 0, sizeof(*c));
+	c->last_frame = -1;
+	lcm_eventlog_t *ev = lcm_eventlog_create(path, "r");
+	if (!ev)
+		fail_msg("cannot read the LCM log %s", path);
+	lcm_eventlog_event_t *e;
+	while ((e = lcm_eventlog_read_next_event(ev))) {
+		read_event(e, c, on_status, ctx);
+		lcm_eventlog_free_event(e);
+	}
+	lcm_eventlog_destroy(ev);
 }

@@ -7,6 +7,7 @@
 
 #include "mvod/eval.h"
 #include "mvod/traj.h"
+#include "mvod_status_t.h"
 
 /* Exit code meson reads as "skipped". */
 #define EXIT_SKIP 77
@@ -39,6 +40,11 @@ void harness_wait_lines(const char *path, int n, pid_t pid);
 struct _mvod_status_t;
 int harness_statuses(const char *log, struct _mvod_status_t *out, int max);
 
+/*
+ * Starts argv (NULL-terminated; output not captured), sends it sig once path holds at least
+ * lines lines, and returns its wait status; fails the test if it ends before.
+ */
+int harness_signal_after(char *const argv[], const char *path, int lines, int sig);
 /* Renders a sequence with mvod-synth into dir; then extra arguments, NULL-terminated. */
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...);
 
@@ -52,5 +58,17 @@ struct traj_errors {
 	double max_translation; /* largest |t| of the estimate (drift of a static camera) */
 };
 void harness_compare(const char *est_path, const char *gt_path, int sim3, struct traj_errors *e);
+
+/* What a file:// LCM log written by mvod holds, on the default channels. */
+struct log_contents {
+	int poses, statuses;
+	int bad;            /* events that do not decode */
+	int gaps;           /* poses not numbered one after the last (frames skipped before) */
+	int64_t last_frame; /* of the last pose, -1 without one */
+	mvod_status_t last_status;
+};
+/* Reads the whole log (failing the test if it cannot be opened); on_status may be NULL. */
+void harness_read_log(const char *path, struct log_contents *c,
+		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx);
 
 #endif

@@ -159,12 +159,9 @@ static void test_killed_run_leaves_complete_lines(void **state)
 	snprintf(traj, sizeof(traj), "%s/killed.kitti", dir);
 	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--calib", cal,
 			"--trajectory", traj, "--no-lcm", "-q", NULL};
-	pid_t pid = harness_spawn(argv, NULL, NULL);
 	/* Kill as soon as a few poses are out, wherever the writer is. */
-	harness_wait_lines(traj, 5, pid);
-	kill(pid, SIGKILL);
-	int st;
-	assert_false(harness_wait(pid, &st));
+	int st = harness_signal_after(argv, traj, 5, SIGKILL);
+	assert_true(WIFSIGNALED(st));
 	struct mvod_traj t;
 	char err[256];
 	if (mvod_traj_load(traj, &t, err, sizeof(err)) != 0)

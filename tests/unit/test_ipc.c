@@ -168,6 +168,7 @@ static void test_status_roundtrip(void **state)
 		.frames = 123456789012LL, .dropped = 42, .rss_kb = 65536,
 		.uptime_s = 3600.125,
 		.state = MVOD_STATE_LOST,
+		.faults = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE | MVOD_STATUS_T_FAULT_PUBLISH,
 	};
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
 	mvod_status_t_subscription_t *sub =
@@ -194,6 +195,7 @@ static void test_status_roundtrip(void **state)
 	assert_int_equal(m->dropped_frames, 42);
 	assert_int_equal(m->rss_kb, 65536);
 	assert_true(m->uptime_s == 3600.125);
+	assert_int_equal(m->faults, st.faults);
 
 	mvod_status_t_unsubscribe(f->lcm, sub);
 	mvod_ipc_destroy(ipc);

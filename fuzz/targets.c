@@ -1,0 +1,154 @@
+/*
+ * libFuzzer targets for every parser of outside input. meson builds this file once per target
+ * with -DFUZZ_<NAME> (fuzz/meson.build); a new target is a case here and its name there.
+ * Besides not crashing (AddressSanitizer watches every access), each parser must keep its
+ * promise: on failure a one-line reason; on success a result that is usable.
+ */
+#include <assert.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include "capture/uri.h"
+#include "mvod/board.h"
+#include "mvod/calib.h"
+#include "mvod/config.h"
+#include "mvod/traj.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* Each target uses some of the helpers below. */
+#define HELPER static __attribute__((unused))
+
+/* The input as the NUL-terminated string the parsers take (libFuzzer's data has no NUL). */
+HELPER char *as_string(const uint8_t *data, size_t size)
+{
+	char *s = malloc(size + 1);
+	assert(s);
+	memcpy(s, data, size);
+	s[size] = '\0';
+	return s;
+}
+
+/* The input as a file, for the parsers that read one: a memory file, reused, by its path. */
+HELPER const char *as_file(const uint8_t *data, size_t size)
+{
+	static int fd = -1;
+	static char path[64];
+	if (fd < 0) {
+		fd = memfd_create("mvod-fuzz", 0);
+		assert(fd >= 0);
+		snprintf(path, sizeof(path), "/proc/self/fd/%d", fd);
+	}
+	int ok = ftruncate(fd, 0) == 0 && pwrite(fd, data, size, 0) == (ssize_t)size;
+	assert(ok);
+	return path;
+}
+
+/* A failure says why, in one line. */
+static void check_reason(int ret, const char *err)
+{
+	if (ret)
+		assert(ret < 0 && err[0] && !strchr(err, '\n'));
+}
+
+/* Parsed intrinsics are finite, with positive focal lengths and a known distortion count. */
+HELPER void check_camera(int ret, const struct mvod_camera *c)
+{
+	if (!ret)
+		assert(c->fx > 0 && c->fy > 0 && isfinite(c->fx) && isfinite(c->fy) &&
+		       isfinite(c->cx) && isfinite(c->cy) && c->n_dist >= 0 &&
+		       c->n_dist <= (int)(sizeof(c->dist) / sizeof(c->dist[0])));
+}
+
+#if defined(FUZZ_URI)
+/* Every value goes through both value parsers the backends use; no key is refused. */
+static int take_any(void *ctx, const char *key, const char *value, char *err, size_t errlen)
+{
+	long i;
+	double f;
+	(void)ctx;
+	check_reason(mvod_uri_int(key, value, -1000, 1000, &i, err, errlen), err);
+	check_reason(mvod_uri_positive(key, value, 1e6, &f, err, errlen), err);
+	return 0;
+}
+#endif
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	char err[512] = "";
+	int ret;
+#if defined(FUZZ_CALIB_JSON) || defined(FUZZ_CALIB_PAIR) || defined(FUZZ_CALIB_FILESTORAGE)
+	struct mvod_camera cam;
+	char *s = as_string(data, size);
+#if defined(FUZZ_CALIB_JSON)
+	ret = mvod_calib_parse_json(s, &cam, err, sizeof(err));
+#elif defined(FUZZ_CALIB_PAIR)
+	ret = mvod_calib_parse_json_pair(s, &cam, err, sizeof(err));
+#else
+	ret = mvod_calib_parse_filestorage(s, &cam, NULL, err, sizeof(err));
+#endif
+	free(s);
+	check_camera(ret, &cam);
+#elif defined(FUZZ_CALIB_KITTI) || defined(FUZZ_CALIB_LOAD)
+	struct mvod_camera cam;
+#if defined(FUZZ_CALIB_KITTI)
+	ret = mvod_calib_load_kitti(as_file(data, size), &cam, err, sizeof(err));
+#else
+	ret = mvod_calib_load(as_file(data, size), &cam, err, sizeof(err));
+#endif
+	check_camera(ret, &cam);
+#elif defined(FUZZ_TRAJ)
+	struct mvod_traj t;
+	ret = mvod_traj_load(as_file(data, size), &t, err, sizeof(err));
+	if (!ret) {
+		assert(t.n > 0);
+		mvod_traj_free(&t);
+	}
+#elif defined(FUZZ_BOARD)
+	struct mvod_board b;
+	char *s = as_string(data, size);
+	ret = mvod_board_parse(s, &b, err, sizeof(err));
+	free(s);
+	if (!ret)
+		assert(b.cols > 0 && b.rows > 0);
+#elif defined(FUZZ_URI)
+	char path[256];
+	char *s = as_string(data, size);
+	ret = mvod_uri_parse(s, path, sizeof(path), take_any, NULL, err, sizeof(err));
+	free(s);
+	if (!ret)
+		assert(strlen(path) < sizeof(path));
+#elif defined(FUZZ_CONFIG)
+	/* What parses must print back, and the printed file parse to the same settings. */
+	struct mvod_config c;
+	ret = mvod_config_parse_buffer("fuzz.conf", (const char *)data, size, &c, err, sizeof(err));
+	if (!ret) {
+		char *text = NULL;
+		size_t len = 0;
+		FILE *out = open_memstream(&text, &len);
+		assert(out);
+		char perr[256];
+		int pret = mvod_config_print(&c, out, perr, sizeof(perr));
+		fclose(out);
+		if (pret == 0) {
+			struct mvod_config back;
+			char berr[512];
+			int bret = mvod_config_parse_buffer("printed", text, len, &back, berr, sizeof(berr));
+			assert(bret == 0);
+			assert(back.set == c.set);
+			mvod_config_fini(&back);
+		}
+		free(text);
+		mvod_config_fini(&c);
+	}
+#else
+#error "fuzz/targets.c: build with -DFUZZ_<NAME> of a target in fuzz/meson.build"
+#endif
+	check_reason(ret, err);
+	return 0;
+}

@@ -1,0 +1,217 @@
+/*
+ * Faults while running, each on the real binary: the fault is logged once (not per frame),
+ * set in every status from then on (mvod.status_t FAULT_ bits), and mvod keeps publishing
+ * poses where it can. Startup faults (a bad LCM URL here; a missing calibration in
+ * test_bad_input) exit 1 with one clear message and leave no output file behind. A SIGTERM at a
+ * random frame leaves a trajectory whose every line parses and an LCM log that reads to its end.
+ */
+#include <setjmp.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+#include "mvod_pose_t.h"
+
+#define FRAMES 60
+
+static char seq[256], video[300], calib[300], traj[300], lcmlog[300], url[320];
+
+static int setup(void **state)
+{
+	(void)state;
+	const char *tmp = harness_tmpdir();
+	snprintf(seq, sizeof(seq), "%s/seq", tmp);
+	harness_synth(seq, "forward", FRAMES, "mkv", "--size", "320x240", NULL);
+	snprintf(video, sizeof(video), "file:%s/video.mkv", seq);
+	snprintf(calib, sizeof(calib), "%s/calib.json", seq);
+	snprintf(traj, sizeof(traj), "%s/out.tum", tmp);
+	snprintf(lcmlog, sizeof(lcmlog), "%s/out.lcmlog", tmp);
+	snprintf(url, sizeof(url), "file://%s?mode=w", lcmlog);
+	return 0;
+}
+
+/* Occurrences of needle in text. */
+static int count(const char *text, const char *needle)
+{
+	int n = 0;
+	for (const char *p = text; (p = strstr(p, needle)); p++)
+		n++;
+	return n;
+}
+
+/* mvod on source with the calibration, trajectory to out, LCM to the log (or lcm_url). */
+static void run_mvod(const char *source, const char *cal, const char *out, const char *lcm_url,
+		     struct run_result *r)
+{
+	unlink(traj);
+	unlink(lcmlog);
+	char *argv[] = {(char *)harness_bin("MVOD"), "-q", "--source", (char *)source, "--calib",
+			(char *)cal, "--trajectory", (char *)out, "--lcm-url", (char *)lcm_url, NULL};
+	assert_int_equal(harness_run(argv, r), 0);
+	if (!r->exited)
+		fail_msg("mvod killed by signal %d: %s", r->status, r->err);
+}
+
+/* Poses in a trajectory file, failing the test unless every line parses. */
+static int traj_lines(const char *path)
+{
+	struct mvod_traj t;
+	char err[512];
+	if (mvod_traj_load(path, &t, err, sizeof(err)))
+		fail_msg("%s", err);
+	int n = t.n;
+	mvod_traj_free(&t);
+	return n;
+}
+
+/*
+ * The LCM log decodes whole: n poses, numbered in order but for gaps where frames were
+ * skipped (gaps < 0: any number, for a live source that may drop frames under load), and a
+ * last status saying mvod stopped, with faults.
+ */
+static void check_log(int n, int gaps, int32_t faults)
+{
+	struct log_contents c;
+	harness_read_log(lcmlog, &c, NULL, NULL);
+	assert_int_equal(c.bad, 0);
+	if (gaps >= 0)
+		assert_int_equal(c.gaps, gaps);
+	assert_int_equal(c.poses, n);
+	assert_int_equal(c.last_status.state, MVOD_POSE_T_STATE_STOPPING);
+	assert_int_equal(c.last_status.frames, n);
+	assert_int_equal(c.last_status.faults, faults);
+}
+
+/* A video cut off mid-stream: the frames before it go out, then exit 1 saying so. */
+static void expect_broken(const char *query, int gaps)
+{
+	char cut[300], src[340], cmd[1400];
+	snprintf(cut, sizeof(cut), "%s/cut.mkv", harness_tmpdir());
+	/* The first third of the bytes: well inside the stream, past the header. */
+	snprintf(cmd, sizeof(cmd), "head -c $(( $(stat -c %%s '%s/video.mkv') / 3 )) '%s/video.mkv' > '%s'",
+		 seq, seq, cut);
+	assert_int_equal(system(cmd), 0);
+	snprintf(src, sizeof(src), "file:%s%s", cut, query);
+	struct run_result r;
+	run_mvod(src, calib, traj, url, &r);
+	if (r.status != 1 || count(r.err, "broke off") != 1 || count(r.err, "\n") != 1)
+		fail_msg("expected exit 1 and one 'broke off' line, got %d: %s", r.status, r.err);
+	int n = traj_lines(traj);
+	assert_true(n > 0 && n < FRAMES);
+	check_log(n, gaps, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
+}
+
+static void test_truncated_video(void **state)
+{
+	(void)state;
+	expect_broken("", 0);
+}
+
+/* The same through the capture thread, which also ends on the broken source. */
+static void test_truncated_video_live(void **state)
+{
+	(void)state;
+	expect_broken("?realtime=1", -1);
+}
+
+/* A copy of the PNG sequence in from, with frame 4 garbage and frame 7 an empty file. */
+static void spoil_images(const char *from, const char *dir)
+{
+	char cmd[1400];
+	snprintf(cmd, sizeof(cmd),
+		 "cp -r '%s/images' '%s' && head -c 100 /dev/urandom > '%s/000004.png' && "
+		 ": > '%s/000007.png'", from, dir, dir, dir);
+	assert_int_equal(system(cmd), 0);
+}
+
+static void test_unreadable_frames_skipped(void **state)
+{
+	(void)state;
+	char pngs[300], dir[300], src[320], cal[320];
+	snprintf(pngs, sizeof(pngs), "%s/pngs", harness_tmpdir());
+	harness_synth(pngs, "forward", 12, "png", "--size", "320x240", NULL);
+	snprintf(dir, sizeof(dir), "%s/spoilt", harness_tmpdir());
+	spoil_images(pngs, dir);
+	snprintf(src, sizeof(src), "images:%s", dir);
+	snprintf(cal, sizeof(cal), "%s/calib.json", pngs);
+	struct run_result r;
+	run_mvod(src, cal, traj, url, &r);
+	if (r.status != 0 || count(r.err, "cannot be decoded") != 1 || count(r.err, "\n") != 1)
+		fail_msg("expected exit 0 and one warning for two bad frames, got %d: %s",
+			 r.status, r.err);
+	assert_non_null(strstr(r.err, "frame 4"));
+	assert_int_equal(traj_lines(traj), 10);
+	check_log(10, 2, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+}
+
+/* A full disk: poses still go out over LCM, one error, and exit 1 for the incomplete file. */
+static void test_trajectory_disk_full(void **state)
+{
+	(void)state;
+	struct run_result r;
+	run_mvod(video, calib, "/dev/full", url, &r);
+	if (r.status != 1 || count(r.err, "No space left") != 1 || count(r.err, "\n") != 1)
+		fail_msg("expected exit 1 and one 'No space left' line, got %d: %s", r.status, r.err);
+	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
+}
+
+/* An LCM URL that names no provider, or a bad address: exit 1 naming it, before any output. */
+static void test_invalid_lcm_url(void **state)
+{
+	(void)state;
+	static const char *const urls[] = {"bogus://x", "udpm://999.1.1.1:7667"};
+	for (size_t i = 0; i < sizeof(urls) / sizeof(urls[0]); i++) {
+		struct run_result r;
+		run_mvod(video, calib, traj, urls[i], &r);
+		if (r.status != 1 || !strstr(r.err, urls[i]) || !strstr(r.err, "--lcm-url"))
+			fail_msg("%s: expected exit 1 naming the URL, got %d: %s", urls[i],
+				 r.status, r.err);
+		assert_int_not_equal(access(traj, F_OK), 0);
+	}
+}
+
+/* SIGTERM after a random number of poses: both outputs are whole and agree. */
+static void test_sigterm_leaves_whole_outputs(void **state)
+{
+	(void)state;
+	char dir[300], src[400], cal[400];
+	snprintf(dir, sizeof(dir), "%s/long", harness_tmpdir());
+	harness_synth(dir, "forward", 300, "mkv", "--size", "320x240", NULL);
+	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
+	snprintf(cal, sizeof(cal), "%s/calib.json", dir);
+	unsigned seed = (unsigned)time(NULL);
+	srand(seed);
+	int at = 2 + rand() % 150;
+	printf("SIGTERM after %d poses (seed %u)\n", at, seed);
+	unlink(traj);
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--calib", cal,
+			"--trajectory", traj, "--lcm-url", url, "-q", NULL};
+	int st = harness_signal_after(argv, traj, at, SIGTERM);
+	assert_true(WIFEXITED(st));
+	assert_int_equal(WEXITSTATUS(st), 0);
+	int n = traj_lines(traj);
+	assert_true(n >= at && n < 300);
+	check_log(n, 0, 0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_truncated_video),
+		cmocka_unit_test(test_truncated_video_live),
+		cmocka_unit_test(test_trajectory_disk_full),
+		cmocka_unit_test(test_invalid_lcm_url),
+		cmocka_unit_test(test_sigterm_leaves_whole_outputs),
+		cmocka_unit_test(test_unreadable_frames_skipped),
+	};
+	return cmocka_run_group_tests(tests, setup, harness_teardown);
+}
