@@ -142,6 +142,18 @@ int harness_wait(pid_t pid, int *status)
 	return WIFEXITED(st);
 }
 
+int harness_traj_lines(const char *path)
+{
+	struct mvod_traj t;
+	char err[512];
+	if (mvod_traj_load(path, &t, err, sizeof(err)))
+		fail_msg("%s", err);
+	int n = t.n;
+	mvod_traj_free(&t);
+	assert_int_equal(harness_count_lines(path), n);
+	return n;
+}
+
 int harness_count_lines(const char *path)
 {
 	FILE *f = fopen(path, "r");

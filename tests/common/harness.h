@@ -32,6 +32,11 @@ int harness_teardown(void **state);
 pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_path);
 /* Waits for pid; 1 with its exit status in *status, or 0 with the signal that killed it. */
 int harness_wait(pid_t pid, int *status);
+/*
+ * Poses in a trajectory file, failing the test unless every line parses and every line is a
+ * pose (no half-written line at the end).
+ */
+int harness_traj_lines(const char *path);
 /* Complete lines in a file, or -1 when it cannot be read. */
 int harness_count_lines(const char *path);
 /* Waits until path has at least n lines, failing the test if pid ends first. */

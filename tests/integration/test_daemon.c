@@ -57,19 +57,6 @@ static void write_file(const char *path, const char *text)
 	assert_int_equal(fclose(f), 0);
 }
 
-/* Every line parses as a pose; returns how many there are. */
-static int traj_lines(const char *path)
-{
-	struct mvod_traj t;
-	char err[512];
-	if (mvod_traj_load(path, &t, err, sizeof(err)))
-		fail_msg("%s", err);
-	int n = t.n;
-	mvod_traj_free(&t);
-	assert_int_equal(harness_count_lines(path), n);
-	return n;
-}
-
 /* A config naming the clip, its calibration and a trajectory; extra lines appended. */
 static void good_config(const char *path, const char *traj, const char *extra)
 {
@@ -93,13 +80,13 @@ static void test_config_file_runs(void **state)
 	assert_int_equal(harness_run(argv, &r), 0);
 	if (!r.exited || r.status)
 		fail_msg("mvod --config failed (%d): %s", r.status, r.err);
-	assert_int_equal(traj_lines(traj), 10);
+	assert_int_equal(harness_traj_lines(traj), 10);
 	assert_string_equal(r.out, ""); /* quiet = true: no summary */
 	/* A flag beats the file. */
 	char *argv2[] = {(char *)harness_bin("MVOD"), "--config", conf, "--max-frames", "4", NULL};
 	assert_int_equal(harness_run(argv2, &r), 0);
 	assert_true(r.exited && r.status == 0);
-	assert_int_equal(traj_lines(traj), 4);
+	assert_int_equal(harness_traj_lines(traj), 4);
 }
 
 /* Exit 2, the message on stderr, and the trajectory the file names never created. */
@@ -329,7 +316,7 @@ static void test_sigterm_stops_cleanly(void **state)
 	assert_true(n >= 2 && n <= 256);
 	/* The last status is STATE_STOPPING, with the totals: one pose line per frame. */
 	assert_int_equal(all[n - 1].state, 5);
-	assert_int_equal(traj_lines(traj), all[n - 1].frames);
+	assert_int_equal(harness_traj_lines(traj), all[n - 1].frames);
 	assert_int_equal(summary_frames(out), all[n - 1].frames);
 }
 
@@ -354,7 +341,7 @@ static void test_second_sigterm_exits_at_once(void **state)
 	/* The second signal's _exit(128 + signal), whichever arrived second; not the clean 0. */
 	if (st != 128 + SIGINT && st != 128 + SIGTERM)
 		fail_msg("exit status %d: not the immediate exit of a second signal", st);
-	assert_true(traj_lines(traj) >= 3);
+	assert_true(harness_traj_lines(traj) >= 3);
 }
 
 /* --status-rate 10: periodic status ten times a second instead of once. */

@@ -61,18 +61,6 @@ static void run_mvod(const char *source, const char *cal, const char *out, const
 		fail_msg("mvod killed by signal %d: %s", r->status, r->err);
 }
 
-/* Poses in a trajectory file, failing the test unless every line parses. */
-static int traj_lines(const char *path)
-{
-	struct mvod_traj t;
-	char err[512];
-	if (mvod_traj_load(path, &t, err, sizeof(err)))
-		fail_msg("%s", err);
-	int n = t.n;
-	mvod_traj_free(&t);
-	return n;
-}
-
 /*
  * The LCM log decodes whole: n poses, numbered in order but for gaps where frames were
  * skipped (gaps < 0: any number, for a live source that may drop frames under load), and a
@@ -105,7 +93,7 @@ static void expect_broken(const char *query, int gaps)
 	run_mvod(src, calib, traj, url, &r);
 	if (r.status != 1 || count(r.err, "broke off") != 1 || count(r.err, "\n") != 1)
 		fail_msg("expected exit 1 and one 'broke off' line, got %d: %s", r.status, r.err);
-	int n = traj_lines(traj);
+	int n = harness_traj_lines(traj);
 	assert_true(n > 0 && n < FRAMES);
 	check_log(n, gaps, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
 }
@@ -149,7 +137,7 @@ static void test_unreadable_frames_skipped(void **state)
 		fail_msg("expected exit 0 and one warning for two bad frames, got %d: %s",
 			 r.status, r.err);
 	assert_non_null(strstr(r.err, "frame 4"));
-	assert_int_equal(traj_lines(traj), 10);
+	assert_int_equal(harness_traj_lines(traj), 10);
 	check_log(10, 2, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 }
 
@@ -198,7 +186,7 @@ static void test_sigterm_leaves_whole_outputs(void **state)
 	int st = harness_signal_after(argv, traj, at, SIGTERM);
 	assert_true(WIFEXITED(st));
 	assert_int_equal(WEXITSTATUS(st), 0);
-	int n = traj_lines(traj);
+	int n = harness_traj_lines(traj);
 	assert_true(n >= at && n < 300);
 	check_log(n, 0, 0);
 }
