@@ -124,12 +124,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (!ret)
 		assert(strlen(path) < sizeof(path));
 #elif defined(FUZZ_CONFIG)
-	/* What parses must print back, and the printed file parse to the same settings. */
+	/* What parses prints back as a file that parses to the same settings (prints the same). */
 	struct mvod_config c;
 	ret = mvod_config_parse_buffer("fuzz.conf", (const char *)data, size, &c, err, sizeof(err));
 	if (!ret) {
-		char *text = NULL;
-		size_t len = 0;
+		char *text = NULL, *again = NULL;
+		size_t len = 0, len2 = 0;
 		FILE *out = open_memstream(&text, &len);
 		assert(out);
 		char perr[256];
@@ -140,7 +140,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 			char berr[512];
 			int bret = mvod_config_parse_buffer("printed", text, len, &back, berr, sizeof(berr));
 			assert(bret == 0);
-			assert(back.set == c.set);
+			out = open_memstream(&again, &len2);
+			assert(out && mvod_config_print(&back, out, perr, sizeof(perr)) == 0);
+			fclose(out);
+			assert(len2 == len && memcmp(again, text, len) == 0);
+			free(again);
 			mvod_config_fini(&back);
 		}
 		free(text);
