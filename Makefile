@@ -83,10 +83,13 @@ demo: build
 		--gt $(DEMODIR)/synth/gt.tum --trajectory $(DEMODIR)/trajectory.tum \
 		--plot $(DEMODIR)/trajectory.png \
 		--lcm-url 'file://$(abspath $(DEMODIR))/mvod.lcmlog?mode=w'
+	$(BUILDDIR)/mvod view --lcm-url 'file://$(abspath $(DEMODIR))/mvod.lcmlog?mode=r&speed=0' \
+		--png $(DEMODIR)/view.png
 	@echo
 	@echo "demo: trajectory  $(DEMODIR)/trajectory.tum (TUM: t x y z qx qy qz qw)"
 	@echo "demo: plot        $(DEMODIR)/trajectory.png"
 	@echo "demo: LCM log     $(DEMODIR)/mvod.lcmlog (mvod.pose_t on MVOD_POSE, mvod.status_t on MVOD_STATUS)"
+	@echo "demo: viewer      $(DEMODIR)/view.png (mvod view of that log: path, heading, state, rates)"
 	@echo "demo: input       $(DEMODIR)/synth/ (video.mkv, calib.json, gt.tum, gt.kitti)"
 
 bench: build
