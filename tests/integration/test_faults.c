@@ -152,11 +152,15 @@ static void test_trajectory_disk_full(void **state)
 	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
 }
 
-/* An LCM URL that names no provider, or a bad address: exit 1 naming it, before any output. */
+/*
+ * An LCM URL that names no provider, or one whose provider cannot open (a log in a directory
+ * that does not exist): exit 1 naming it, before any output. Tests use memq:// and file://
+ * only, so the second stands for every provider that fails to start.
+ */
 static void test_invalid_lcm_url(void **state)
 {
 	(void)state;
-	static const char *const urls[] = {"bogus://x", "udpm://999.1.1.1:7667"};
+	static const char *const urls[] = {"bogus://x", "file:///nonexistent-mvod-dir/run.lcmlog?mode=w"};
 	for (size_t i = 0; i < sizeof(urls) / sizeof(urls[0]); i++) {
 		struct run_result r;
 		run_mvod(video, calib, traj, urls[i], &r);
