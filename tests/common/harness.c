@@ -142,6 +142,26 @@ int harness_wait(pid_t pid, int *status)
 	return WIFEXITED(st);
 }
 
+void harness_write_file(const char *path, const char *text)
+{
+	FILE *f = fopen(path, "w");
+	if (!f)
+		fail_msg("cannot write %s: %s", path, strerror(errno));
+	fputs(text, f);
+	assert_int_equal(fclose(f), 0);
+}
+
+void harness_read_file(const char *path, char *buf, size_t len)
+{
+	buf[0] = '\0';
+	FILE *f = fopen(path, "r");
+	if (!f)
+		return;
+	size_t n = fread(buf, 1, len - 1, f);
+	buf[n] = '\0';
+	fclose(f);
+}
+
 int harness_traj_lines(const char *path)
 {
 	struct mvod_traj t;

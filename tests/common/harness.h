@@ -23,6 +23,10 @@ struct run_result {
 int harness_run(char *const argv[], struct run_result *r);
 /* Path of a binary from the environment (MVOD, MVOD_SYNTH), failing the test if unset. */
 const char *harness_bin(const char *env);
+/* Writes text to path, failing the test if it cannot. */
+void harness_write_file(const char *path, const char *text);
+/* Reads at most len - 1 bytes of path into buf, NUL-terminated; "" when it cannot be read. */
+void harness_read_file(const char *path, char *buf, size_t len);
 /* A fresh temporary directory, removed by harness_cleanup(). */
 const char *harness_tmpdir(void);
 void harness_cleanup(void);

@@ -35,10 +35,7 @@ static const char *write_file(const char *name, const char *text)
 	static int k;
 	char *p = path[k++ % 2];
 	snprintf(p, 300, "%s/%s", harness_tmpdir(), name);
-	FILE *f = fopen(p, "w");
-	assert_non_null(f);
-	fputs(text, f);
-	fclose(f);
+	harness_write_file(p, text);
 	return p;
 }
 

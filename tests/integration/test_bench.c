@@ -103,15 +103,6 @@ static int count_substr(const char *s, const char *needle)
 	return n;
 }
 
-static void read_text(const char *path, char *text, size_t len)
-{
-	FILE *f = fopen(path, "r");
-	assert_non_null(f);
-	size_t n = fread(text, 1, len - 1, f);
-	fclose(f);
-	text[n] = '\0';
-}
-
 static void test_one_configuration(void **state)
 {
 	(void)state;
@@ -147,7 +138,7 @@ static void test_one_configuration(void **state)
 	/* The same row on stdout and in the report, as Markdown: header, rule, row. */
 	assert_non_null(strstr(r.out, "| detector | matcher |"));
 	char text[8192];
-	read_text(md, text, sizeof(text));
+	harness_read_file(md, text, sizeof(text));
 	assert_int_equal(count_substr(text, "\n"), 3);
 	assert_int_equal(count_substr(text, "| orb | bf |"), 1);
 	const char *pngs[] = {"path-top.png", "path-side.png", "errors.png"};
@@ -185,7 +176,7 @@ static void test_sweep_two_configurations(void **state)
 	assert_string_equal(cells[1][f], "500");
 	assert_true(atof(cells[0][e]) <= atof(cells[1][e]));
 	char text[8192];
-	read_text(md, text, sizeof(text));
+	harness_read_file(md, text, sizeof(text));
 	assert_int_equal(count_substr(text, "| orb | bf-"), 2);
 	assert_non_null(strstr(r.out, "| orb | bf-cross best 200 |"));
 	/* Each run was a process of its own, and said so. */
@@ -195,10 +186,7 @@ static void test_sweep_two_configurations(void **state)
 static const char *write_file(const char *name, const char *text)
 {
 	const char *p = tmp_path(name);
-	FILE *f = fopen(p, "w");
-	assert_non_null(f);
-	fputs(text, f);
-	fclose(f);
+	harness_write_file(p, text);
 	return p;
 }
 

@@ -31,14 +31,6 @@ static const char *path_in(const char *name)
 	return buf[k];
 }
 
-static void write_text(const char *path, const char *text)
-{
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	fputs(text, f);
-	fclose(f);
-}
-
 static struct run_result r;
 
 static int convert(const char *a, const char *b, const char *c, const char *d)
@@ -56,7 +48,7 @@ static void ros_mvod_opencv_ros(void **state)
 	(void)state;
 	const char *ros = path_in("cam.yaml"), *json = path_in("cam.json");
 	const char *cv = path_in("cam-cv.yml"), *ros2 = path_in("cam-ros.yaml");
-	write_text(ros, ROS_YAML);
+	harness_write_file(ros, ROS_YAML);
 	assert_int_equal(convert(ros, json, NULL, NULL), 0);
 	assert_non_null(strstr(r.out, "ROS"));
 	/* Options before the operands work as well as after them. */
@@ -82,8 +74,8 @@ static void refusals_keep_out(void **state)
 {
 	(void)state;
 	const char *ros = path_in("r.yaml"), *kitti = path_in("calib.txt");
-	write_text(ros, ROS_YAML);
-	write_text(kitti, "previous contents\n");
+	harness_write_file(ros, ROS_YAML);
+	harness_write_file(kitti, "previous contents\n");
 	assert_int_equal(convert(ros, kitti, NULL, NULL), 1); /* KITTI holds no distortion */
 	assert_non_null(strstr(r.err, "distortion"));
 	FILE *f = fopen(kitti, "r");

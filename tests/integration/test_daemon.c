@@ -49,14 +49,6 @@ static const char *tmp_path(char *buf, size_t len, const char *name)
 	return buf;
 }
 
-static void write_file(const char *path, const char *text)
-{
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	fputs(text, f);
-	assert_int_equal(fclose(f), 0);
-}
-
 /* A config naming the clip, its calibration and a trajectory; extra lines appended. */
 static void good_config(const char *path, const char *traj, const char *extra)
 {
@@ -65,7 +57,7 @@ static void good_config(const char *path, const char *traj, const char *extra)
 		 "# written by test_daemon\n[source]\nuri = %s\nmax-frames = 10\n"
 		 "[calibration]\nfile = %s\n[lcm]\nenabled = false\n[output]\ntrajectory = %s\n%s",
 		 video, calib, traj, extra);
-	write_file(path, text);
+	harness_write_file(path, text);
 }
 
 static void test_config_file_runs(void **state)
@@ -96,7 +88,7 @@ static void expect_config_error(const char *text, const char *needle)
 	tmp_path(conf, sizeof(conf), "bad.conf");
 	tmp_path(traj, sizeof(traj), "bad.tum");
 	snprintf(full, sizeof(full), "[output]\ntrajectory = %s\n%s", traj, text);
-	write_file(conf, full);
+	harness_write_file(conf, full);
 	char *argv[] = {(char *)harness_bin("MVOD"), "--config", conf, "--source", video,
 			"--calib", calib, "--no-lcm", NULL};
 	struct run_result r;
@@ -144,7 +136,7 @@ static void test_print_config_round_trip(void **state)
 	assert_non_null(strstr(r.out, "\nmax-frames = 10\n"));
 	assert_non_null(strstr(r.out, "\nformat = kitti\n"));
 	assert_non_null(strstr(r.out, "\nenabled = false\n"));
-	write_file(printed, r.out);
+	harness_write_file(printed, r.out);
 	char first[sizeof(r.out)];
 	strcpy(first, r.out);
 	char *argv2[] = {(char *)harness_bin("MVOD"), "--config", printed, "--print-config", NULL};

@@ -160,13 +160,8 @@ static void selection_spreads(void **state)
 
 static int file_has(const char *path, const char *needle)
 {
-	char buf[16384] = "";
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return 0;
-	size_t n = fread(buf, 1, sizeof(buf) - 1, f);
-	buf[n] = '\0';
-	fclose(f);
+	char buf[16384];
+	harness_read_file(path, buf, sizeof(buf));
 	return strstr(buf, needle) != NULL;
 }
 

@@ -28,10 +28,7 @@ static const char *write_file(const char *name, const char *text)
 {
 	static char path[256];
 	snprintf(path, sizeof(path), "%s/%s", dir, name);
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	fputs(text, f);
-	fclose(f);
+	harness_write_file(path, text);
 	return path;
 }
 

@@ -37,10 +37,7 @@ static const char *path_of(const char *name)
 static const char *write_file(const char *name, const char *text)
 {
 	const char *path = path_of(name);
-	FILE *f = fopen(path, "w");
-	assert_non_null(f);
-	fputs(text, f);
-	fclose(f);
+	harness_write_file(path, text);
 	return path;
 }
 
