@@ -16,8 +16,9 @@
 #include <cmocka.h>
 #include <lcm/eventlog.h>
 
-#include "mvod_status_t.h"
+#include "mvod/capture.h"
 #include "mvod/ipc.h"
+#include "mvod_status_t.h"
 #include "mvod_pose_t.h"
 
 static char tmpdir[64];
@@ -140,6 +141,16 @@ int harness_wait(pid_t pid, int *status)
 			fail_msg("waitpid: %s", strerror(errno));
 	*status = WIFEXITED(st) ? WEXITSTATUS(st) : WTERMSIG(st);
 	return WIFEXITED(st);
+}
+
+void harness_source_open_fails(const char *uri, int code, const char *needle)
+{
+	struct mvod_source *src = NULL;
+	char err[512] = "";
+	assert_int_equal(mvod_source_open(uri, &src, err, sizeof(err)), code);
+	assert_null(src);
+	if (!strstr(err, needle))
+		fail_msg("\"%s\" does not say \"%s\"", err, needle);
 }
 
 void harness_write_file(const char *path, const char *text)

@@ -23,6 +23,8 @@ struct run_result {
 int harness_run(char *const argv[], struct run_result *r);
 /* Path of a binary from the environment (MVOD, MVOD_SYNTH), failing the test if unset. */
 const char *harness_bin(const char *env);
+/* mvod_source_open(uri) fails with code, no source, and an err holding needle. */
+void harness_source_open_fails(const char *uri, int code, const char *needle);
 /* Writes text to path, failing the test if it cannot. */
 void harness_write_file(const char *path, const char *text);
 /* Reads at most len - 1 bytes of path into buf, NUL-terminated; "" when it cannot be read. */

@@ -18,6 +18,8 @@
 
 #include <cmocka.h>
 
+#include "harness.h"
+
 #include "mvod/capture.h"
 
 static char dir[64];
@@ -112,17 +114,6 @@ static struct mvod_source *open_ok(const char *scheme, const char *location)
 	return src;
 }
 
-/* Opening fails with code and an err holding needle. */
-static void open_fails(const char *uri, int code, const char *needle)
-{
-	struct mvod_source *src = NULL;
-	char err[512] = "";
-	assert_int_equal(mvod_source_open(uri, &src, err, sizeof(err)), code);
-	assert_null(src);
-	if (!strstr(err, needle))
-		fail_msg("\"%s\" does not say \"%s\"", err, needle);
-}
-
 static void test_registry(void **state)
 {
 	(void)state;
@@ -141,18 +132,18 @@ static void test_registry(void **state)
 static void test_unknown_scheme(void **state)
 {
 	(void)state;
-	open_fails("rtsp://cam/stream", -EPROTONOSUPPORT, "\"rtsp\"");
-	open_fails("rtsp://cam/stream", -EPROTONOSUPPORT, "known: file, images, kitti");
+	harness_source_open_fails("rtsp://cam/stream", -EPROTONOSUPPORT, "\"rtsp\"");
+	harness_source_open_fails("rtsp://cam/stream", -EPROTONOSUPPORT, "known: file, images, kitti");
 }
 
 static void test_plain_path(void **state)
 {
 	(void)state;
-	open_fails("clip.mkv", -EPROTONOSUPPORT, "file:clip.mkv");
-	open_fails("./odd:name.mkv", -EPROTONOSUPPORT, "file:./odd:name.mkv");
+	harness_source_open_fails("clip.mkv", -EPROTONOSUPPORT, "file:clip.mkv");
+	harness_source_open_fails("./odd:name.mkv", -EPROTONOSUPPORT, "file:./odd:name.mkv");
 	char uri[128];
 	snprintf(uri, sizeof(uri), "images:%s", dir);
-	open_fails(dir, -EPROTONOSUPPORT, uri);
+	harness_source_open_fails(dir, -EPROTONOSUPPORT, uri);
 }
 
 static void test_close_null(void **state)
@@ -247,7 +238,7 @@ static void test_images_too_few_times(void **state)
 	write_text("times.txt", "0.0\n0.1\n");
 	char uri[128];
 	snprintf(uri, sizeof(uri), "images:%s", dir);
-	open_fails(uri, -EINVAL, "2 timestamps for 3 images");
+	harness_source_open_fails(uri, -EINVAL, "2 timestamps for 3 images");
 }
 
 static void test_images_bad_time(void **state)
@@ -258,7 +249,7 @@ static void test_images_bad_time(void **state)
 	write_text("times.txt", "0.0\n0.1s\n");
 	char uri[128];
 	snprintf(uri, sizeof(uri), "images:%s", dir);
-	open_fails(uri, -EINVAL, "times.txt line 2: \"0.1s\"");
+	harness_source_open_fails(uri, -EINVAL, "times.txt line 2: \"0.1s\"");
 }
 
 static void test_images_empty_dir(void **state)
@@ -267,8 +258,8 @@ static void test_images_empty_dir(void **state)
 	write_text("times.txt", "0.0\n");
 	char uri[128];
 	snprintf(uri, sizeof(uri), "images:%s", dir);
-	open_fails(uri, -ENOENT, "no images in");
-	open_fails("images:/nonexistent/mvod", -ENOENT, "cannot open image directory");
+	harness_source_open_fails(uri, -ENOENT, "no images in");
+	harness_source_open_fails("images:/nonexistent/mvod", -ENOENT, "cannot open image directory");
 }
 
 static void test_images_end_of_stream(void **state)
@@ -310,7 +301,7 @@ static void test_images_first_undecodable(void **state)
 	write_text("0.png", "not a png");
 	char uri[128];
 	snprintf(uri, sizeof(uri), "images:%s", dir);
-	open_fails(uri, -EINVAL, "cannot decode image");
+	harness_source_open_fails(uri, -EINVAL, "cannot decode image");
 }
 
 /* 16-bit samples become their high byte. */
@@ -423,7 +414,7 @@ static void test_kitti_no_calib(void **state)
 	make_kitti(2, false, true);
 	char uri[128];
 	snprintf(uri, sizeof(uri), "kitti:%s", dir);
-	open_fails(uri, -ENOENT, "calib.txt");
+	harness_source_open_fails(uri, -ENOENT, "calib.txt");
 }
 
 static void test_kitti_no_images(void **state)
@@ -432,7 +423,7 @@ static void test_kitti_no_images(void **state)
 	make_kitti(0, true, true);
 	char uri[128];
 	snprintf(uri, sizeof(uri), "kitti:%s", dir);
-	open_fails(uri, -ENOENT, "no images in");
+	harness_source_open_fails(uri, -ENOENT, "no images in");
 }
 
 static void test_file_missing(void **state)
@@ -440,7 +431,7 @@ static void test_file_missing(void **state)
 	(void)state;
 	char uri[128];
 	snprintf(uri, sizeof(uri), "file:%s/none.mkv", dir);
-	open_fails(uri, -ENOENT, "no such file");
+	harness_source_open_fails(uri, -ENOENT, "no such file");
 }
 
 static void test_file_not_a_video(void **state)
@@ -449,9 +440,9 @@ static void test_file_not_a_video(void **state)
 	write_text("clip.mkv", "this is text, not Matroska\n");
 	char uri[128];
 	snprintf(uri, sizeof(uri), "file:%s/clip.mkv", dir);
-	open_fails(uri, -EINVAL, "cannot decode video");
+	harness_source_open_fails(uri, -EINVAL, "cannot decode video");
 	snprintf(uri, sizeof(uri), "file:%s", dir);
-	open_fails(uri, -EISDIR, "images:");
+	harness_source_open_fails(uri, -EISDIR, "images:");
 }
 
 #define T(f) cmocka_unit_test_setup_teardown(f, setup, teardown)

@@ -21,6 +21,8 @@
 #include <unistd.h>
 
 #include <cmocka.h>
+
+#include "harness.h"
 #include <jpeglib.h>
 #include <linux/videodev2.h>
 #include <lcm/lcm.h>
@@ -413,12 +415,7 @@ static struct mvod_source *open_ok(const char *uri)
 
 static void expect_open_error(const char *uri, int code, const char *needle)
 {
-	struct mvod_source *src = NULL;
-	char err[512] = "";
-	assert_int_equal(mvod_source_open(uri, &src, err, sizeof(err)), code);
-	assert_null(src);
-	if (!strstr(err, needle))
-		fail_msg("\"%s\" does not say \"%s\"", err, needle);
+	harness_source_open_fails(uri, code, needle);
 	assert_int_equal(F.mapped, 0); /* a failed open leaves nothing mapped */
 }
 
