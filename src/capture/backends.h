@@ -1,4 +1,4 @@
-/* What the capture backends share: their registration and the error-reporting helpers. */
+/* What the capture backends share: their registration and path helpers (errors: util/errbuf.h). */
 #ifndef MVOD_CAPTURE_BACKENDS_H
 #define MVOD_CAPTURE_BACKENDS_H
 
@@ -12,10 +12,6 @@ extern const struct mvod_source_ops mvod_source_images_ops;
 extern const struct mvod_source_ops mvod_source_kitti_ops;
 extern const struct mvod_source_ops mvod_source_v4l2_ops;
 extern const struct mvod_source_ops mvod_source_libcamera_ops;
-
-/* Writes the reason to err (when there is room) and returns code. */
-int mvod_capture_fail(char *err, size_t errlen, int code, const char *fmt, ...)
-	__attribute__((format(printf, 4, 5)));
 
 /* "dir/name" into buf; -ENAMETOOLONG with the reason in err when it does not fit. */
 int mvod_capture_path(char *buf, size_t len, const char *dir, const char *name, char *err,

@@ -43,7 +43,12 @@ struct mvod_lcam {
 	bool acquired = false, started = false;
 	std::mutex lock;
 	std::condition_variable done;
-	std::deque<Request *> completed;
+	/*
+	 * Completed requests in order, a ring sized once to the request count (each request is in
+	 * it at most once): a std::deque would allocate and free blocks as frames flow.
+	 */
+	std::vector<Request *> completed;
+	size_t head = 0, queued = 0;
 	bool disconnected = false;
 	Request *current = nullptr; /* handed to the caller, not yet released */
 
@@ -52,7 +57,7 @@ struct mvod_lcam {
 		if (r->status() == Request::RequestCancelled)
 			return;
 		std::lock_guard<std::mutex> g(lock);
-		completed.push_back(r);
+		completed[(head + queued++) % completed.size()] = r;
 		done.notify_one();
 	}
 	void on_disconnect()
@@ -149,6 +154,7 @@ static int make_requests(mvod_lcam *c, char *err, size_t errlen)
 					 "%zu: %s", c->cam->id().c_str(), i, strerror(-ret));
 		c->requests.push_back(std::move(r));
 	}
+	c->completed.assign(c->requests.size(), nullptr);
 	return 0;
 }
 
@@ -216,13 +222,14 @@ extern "C" int mvod_lcam_wait(struct mvod_lcam *c, int timeout_ms, struct mvod_l
 	return mvod_guarded([&] {
 		std::unique_lock<std::mutex> g(c->lock);
 		c->done.wait_for(g, std::chrono::milliseconds(timeout_ms),
-				 [&] { return c->disconnected || !c->completed.empty(); });
+				 [&] { return c->disconnected || c->queued > 0; });
 		if (c->disconnected)
 			return -ENODEV;
-		if (c->completed.empty())
+		if (c->queued == 0)
 			return -EAGAIN;
-		Request *r = c->completed.front();
-		c->completed.pop_front();
+		Request *r = c->completed[c->head];
+		c->head = (c->head + 1) % c->completed.size();
+		c->queued--;
 		g.unlock();
 		c->current = r;
 		const FrameBuffer *b = r->findBuffer(c->stream);
@@ -243,8 +250,7 @@ extern "C" int mvod_lcam_release(struct mvod_lcam *c)
 		if (!r)
 			return 0;
 		r->reuse(Request::ReuseBuffers);
-		int ret = c->cam->queueRequest(r);
-		return ret == -ENODEV ? -ENODEV : ret;
+		return c->cam->queueRequest(r);
 	});
 }
 

@@ -10,7 +10,6 @@ int mvod_mailbox_init(struct mvod_mailbox *mb, size_t bytes)
 	memset(mb, 0, sizeof(*mb));
 	for (int i = 0; i < 3; i++) {
 		mb->letters[i].frame.img.data = malloc(bytes);
-		mb->letters[i].cap = bytes;
 		if (!mb->letters[i].frame.img.data) {
 			mvod_mailbox_fini(mb);
 			return -ENOMEM;

@@ -18,7 +18,6 @@
 struct mvod_letter {
 	struct mvod_frame frame; /* frame.img.data points into this letter's own buffer */
 	int epoch;               /* whatever the producer tags the frame with */
-	size_t cap;              /* bytes of the buffer */
 };
 
 struct mvod_mailbox {
