@@ -194,9 +194,11 @@ static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
 	}
 	sc->with_board++;
 	ret = store_add(s, f);
+	if (ret)
+		return ret;
 	struct mvod_calib_obs v = store_obs(s, s->n - 1);
 	float cx, cy, extent = corner_extent(&v, img->w, img->h, &cx, &cy);
-	if (!ret && extent > sc->sample_extent) {
+	if (extent > sc->sample_extent) {
 		sc->sample_extent = extent;
 		ret = keep_sample(sc, img);
 	}
@@ -360,12 +362,18 @@ static int calibrate_views(const struct mvod_calib_opts *o, const struct scan *s
 	res->outlier_px = mvod_calib_outlier_px(ft->fit.view_rms_px, ft->n);
 	int kept = 0;
 	for (int i = 0; i < ft->n; i++)
-		if (ft->fit.view_rms_px[i] <= res->outlier_px)
-			ft->views[kept++] = ft->views[i];
+		kept += ft->fit.view_rms_px[i] <= res->outlier_px;
 	if (kept == ft->n || kept < MVOD_CALIB_MIN_VIEWS) {
-		/* Either nothing to drop or too little left: the first fit stands, with every view. */
+		/*
+		 * Either nothing to drop or too little left: the first fit stands, with every view
+		 * still in the order of its per-view errors and poses.
+		 */
 		return 0;
 	}
+	kept = 0;
+	for (int i = 0; i < ft->n; i++)
+		if (ft->fit.view_rms_px[i] <= res->outlier_px)
+			ft->views[kept++] = ft->views[i];
 	LOG(INFO, "calibrate: dropped %d of %d views above %.3f px and calibrating again",
 	    ft->n - kept, ft->n, res->outlier_px);
 	ft->n = kept;
