@@ -29,8 +29,10 @@ int main(int argc, char **argv)
 				return commands[i].main(argc - 1, argv + 1);
 			}
 		}
-		fprintf(stderr, "mvod: unknown command '%s'; the commands are run, calibrate, board, "
-				"calib-convert, bench and view (see mvod --help)\n", argv[1]);
+		fprintf(stderr, "mvod: unknown command '%s'; the commands are", argv[1]);
+		for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+			fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
+		fprintf(stderr, " (see mvod --help)\n");
 		return EXIT_USAGE;
 	}
 	return mvod_cmd_run(argc, argv);
