@@ -21,8 +21,8 @@ enum mvod_log_level {
 
 void mvod_log_set_level(enum mvod_log_level level);
 enum mvod_log_level mvod_log_get_level(void);
-/* Parses "error", "warn", "info", "debug"; returns -EINVAL otherwise. */
-int mvod_log_parse_level(const char *name, enum mvod_log_level *out);
+/* "error", "warn", "info", "debug" in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_log_level_names[];
 /*
  * Whether fd is the stream named by journal_stream (the JOURNAL_STREAM variable systemd sets:
  * "DEVICE:INODE" of the journal's socket). Decided for stderr at the first message.

@@ -16,7 +16,8 @@ enum mvod_traj_format {
 	MVOD_TRAJ_KITTI = 1, /* row-major 3x4 [R|t], one pose per line */
 };
 
-int mvod_traj_format_parse(const char *name, enum mvod_traj_format *out);
+/* The formats' names in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_traj_format_names[];
 const char *mvod_traj_format_name(enum mvod_traj_format fmt);
 
 /*

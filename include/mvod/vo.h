@@ -46,14 +46,14 @@ enum mvod_robust_method {
 	MVOD_ROBUST_MAGSAC = 0, /* MAGSAC++ (OpenCV USAC): no hard threshold to tune, fewer wrong models */
 	MVOD_ROBUST_RANSAC = 1, /* classic RANSAC with a fixed inlier threshold */
 };
-int mvod_robust_method_parse(const char *name, enum mvod_robust_method *out);
+/* The estimators' names in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_robust_names[];
 
 /* Keypoint detector and descriptor. */
 enum mvod_detector {
 	MVOD_DETECTOR_ORB = 0,  /* binary 256-bit descriptors: fast, the default */
 	MVOD_DETECTOR_SIFT = 1, /* 128 floats: slower, more distinctive */
 };
-int mvod_detector_parse(const char *name, enum mvod_detector *out);
 /* The detectors' names in enum order, NULL-terminated (the config file's choices). */
 extern const char *const mvod_detector_names[];
 const char *mvod_detector_name(enum mvod_detector d);
@@ -71,7 +71,6 @@ enum mvod_matcher_kind {
 	MVOD_MATCHER_FLANN_RATIO, /* FLANN with the ratio test */
 	MVOD_MATCHER_COUNT,
 };
-int mvod_matcher_kind_parse(const char *name, enum mvod_matcher_kind *out);
 /* The matchers' names in enum order, NULL-terminated. */
 extern const char *const mvod_matcher_names[];
 const char *mvod_matcher_kind_name(enum mvod_matcher_kind m);

@@ -22,9 +22,6 @@ _Static_assert(sizeof(enum mvod_traj_format) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
 
 static const char *const scale_choices[] = {"auto", "gt", NULL};
-static const char *const robust_choices[] = {"magsac", "ransac", NULL};
-static const char *const format_choices[] = {"tum", "kitti", NULL};
-static const char *const level_choices[] = {"error", "warn", "info", "debug", NULL};
 
 #define AT(field) offsetof(struct mvod_config, field)
 #define STR(s, k, f, field) \
@@ -51,7 +48,7 @@ const struct mvod_config_key mvod_config_keys[] = {
 	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000),
 	NUM("vo", "ratio", MVOD_CONFIG_DOUBLE, run.vo.ratio, 0.1, 1.0),
 	NUM("vo", "best", MVOD_CONFIG_INT, run.vo.best_n, 0, 100000),
-	CHOICE("vo", "robust", "robust", run.vo.robust, robust_choices),
+	CHOICE("vo", "robust", "robust", run.vo.robust, mvod_robust_names),
 	NUM("vo", "ransac-px", MVOD_CONFIG_DOUBLE, run.vo.ransac_px, 0.05, 50),
 	NUM("vo", "confidence", MVOD_CONFIG_DOUBLE, run.vo.ransac_conf, 0.5, 0.999999),
 	NUM("vo", "min-parallax", MVOD_CONFIG_DOUBLE, run.vo.min_parallax_px, 0, 100),
@@ -64,9 +61,9 @@ const struct mvod_config_key mvod_config_keys[] = {
 	STR("lcm", "status-channel", "status-channel", status_channel),
 	NUM("lcm", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz, 0.1, 100),
 	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
-	CHOICE("output", "format", "format", run.traj_format, format_choices),
+	CHOICE("output", "format", "format", run.traj_format, mvod_traj_format_names),
 	OPTSTR("output", "plot", "plot", run.plot),
-	CHOICE("log", "level", "log-level", log_level, level_choices),
+	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names),
 	{.section = "log", .key = "quiet", .flag = "quiet", .short_flag = 'q',
 	 .type = MVOD_CONFIG_BOOL, .offset = AT(quiet), .flag_value = true},
 };

@@ -15,7 +15,7 @@ static enum mvod_log_level current_level = MVOD_LOG_INFO;
 static pthread_once_t journal_once = PTHREAD_ONCE_INIT;
 static bool journal;
 
-static const char *const level_names[] = {"error", "warn", "info", "debug"};
+const char *const mvod_log_level_names[] = {"error", "warn", "info", "debug", NULL};
 
 void mvod_log_set_level(enum mvod_log_level level)
 {
@@ -25,17 +25,6 @@ void mvod_log_set_level(enum mvod_log_level level)
 enum mvod_log_level mvod_log_get_level(void)
 {
 	return current_level;
-}
-
-int mvod_log_parse_level(const char *name, enum mvod_log_level *out)
-{
-	for (int i = 0; i < (int)(sizeof(level_names) / sizeof(level_names[0])); i++) {
-		if (strcmp(name, level_names[i]) == 0) {
-			*out = (enum mvod_log_level)i;
-			return 0;
-		}
-	}
-	return -EINVAL;
 }
 
 bool mvod_log_is_journal(const char *journal_stream, int fd)
@@ -69,7 +58,7 @@ void mvod_log(enum mvod_log_level level, const char *fmt, ...)
 	/* One fputs of a whole line, so lines from threads never interleave. */
 	char line[1024];
 	int n = snprintf(line, sizeof(line), "%s%s: ", journal ? priority[level] : "mvod: ",
-			 level_names[level]);
+			 mvod_log_level_names[level]);
 	va_list ap;
 	va_start(ap, fmt);
 	vsnprintf(line + n, sizeof(line) - (size_t)n - 1, fmt, ap);

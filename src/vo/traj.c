@@ -10,22 +10,11 @@
 
 #include "util/errbuf.h"
 
-static const char *const format_names[] = {"tum", "kitti"};
-
-int mvod_traj_format_parse(const char *name, enum mvod_traj_format *out)
-{
-	for (int i = 0; i < 2; i++) {
-		if (strcmp(name, format_names[i]) == 0) {
-			*out = (enum mvod_traj_format)i;
-			return 0;
-		}
-	}
-	return -EINVAL;
-}
+const char *const mvod_traj_format_names[] = {"tum", "kitti", NULL};
 
 const char *mvod_traj_format_name(enum mvod_traj_format fmt)
 {
-	return (unsigned)fmt < 2 ? format_names[fmt] : "unknown";
+	return (unsigned)fmt < 2 ? mvod_traj_format_names[fmt] : "unknown";
 }
 
 struct mvod_traj_writer {

@@ -35,59 +35,20 @@ const char *mvod_scale_source_name(enum mvod_scale_source s)
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
 }
 
-/* Looks name up in names[0..n); -EINVAL when absent. */
-static int parse_name(const char *name, const char *const *names, int n, int *out)
-{
-	for (int i = 0; i < n; i++) {
-		if (strcmp(name, names[i]) == 0) {
-			*out = i;
-			return 0;
-		}
-	}
-	return -EINVAL;
-}
-
 const char *const mvod_detector_names[] = {"orb", "sift", NULL};
 const char *const mvod_matcher_names[MVOD_MATCHER_COUNT + 1] = {"bf", "bf-cross", "bf-ratio",
 								"flann", "flann-ratio", NULL};
-#define detector_names mvod_detector_names
-#define matcher_names mvod_matcher_names
+const char *const mvod_robust_names[] = {"magsac", "ransac", NULL};
 #define DETECTORS ((int)(sizeof(mvod_detector_names) / sizeof(mvod_detector_names[0])) - 1)
-
-int mvod_detector_parse(const char *name, enum mvod_detector *out)
-{
-	int i, ret = parse_name(name, detector_names, DETECTORS, &i);
-	if (!ret)
-		*out = (enum mvod_detector)i;
-	return ret;
-}
 
 const char *mvod_detector_name(enum mvod_detector d)
 {
-	return (unsigned)d < DETECTORS ? detector_names[d] : "unknown";
-}
-
-int mvod_matcher_kind_parse(const char *name, enum mvod_matcher_kind *out)
-{
-	int i, ret = parse_name(name, matcher_names, MVOD_MATCHER_COUNT, &i);
-	if (!ret)
-		*out = (enum mvod_matcher_kind)i;
-	return ret;
+	return (unsigned)d < DETECTORS ? mvod_detector_names[d] : "unknown";
 }
 
 const char *mvod_matcher_kind_name(enum mvod_matcher_kind m)
 {
-	return (unsigned)m < MVOD_MATCHER_COUNT ? matcher_names[m] : "unknown";
-}
-
-static const char *const robust_names[] = {"magsac", "ransac"};
-
-int mvod_robust_method_parse(const char *name, enum mvod_robust_method *out)
-{
-	int i, ret = parse_name(name, robust_names, 2, &i);
-	if (!ret)
-		*out = (enum mvod_robust_method)i;
-	return ret;
+	return (unsigned)m < MVOD_MATCHER_COUNT ? mvod_matcher_names[m] : "unknown";
 }
 
 void mvod_vo_params_default(struct mvod_vo_params *p)
