@@ -526,12 +526,7 @@ static void report_stop(struct run *r)
  */
 static void align_for_plot(struct run *r, const double R[9], const double t[3], double sc)
 {
-	for (int i = 0; i < r->est_path.n; i++) {
-		double *p = r->est_path.xyz + 3 * i;
-		mvod_mat3_vec(R, p, p);
-		for (int k = 0; k < 3; k++)
-			p[k] = sc * p[k] + t[k];
-	}
+	mvod_sim3_apply(R, t, sc, r->est_path.xyz, r->est_path.n);
 	mvod_mat3_mul(R, r->prev_est.R, r->prev_est.R);
 	r->plot_aligned = 1;
 }

@@ -17,6 +17,9 @@ extern "C" {
 int mvod_umeyama(const double *src, const double *dst, int n, bool with_scale, double R[9],
 		 double t[3], double *s);
 
+/* Moves the n points xyz in place to s R xyz + t (the alignment mvod_umeyama found). */
+void mvod_sim3_apply(const double R[9], const double t[3], double s, double *xyz, int n);
+
 /* RMSE of dst - (s R src + t) after mvod_umeyama. */
 double mvod_ate_rmse(const double *src, const double *dst, int n, const double R[9],
 		     const double t[3], double s);

@@ -580,12 +580,7 @@ static void align(double *pe, const double *pg, int n, bool sim3, const double l
 	memcpy(heading, last_R, 9 * sizeof(double));
 	if (mvod_umeyama(pe, pg, n, sim3, R, t, &s) != 0)
 		return;
-	for (int i = 0; i < n; i++) {
-		double *p = pe + 3 * i;
-		mvod_mat3_vec(R, p, p);
-		for (int k = 0; k < 3; k++)
-			p[k] = s * p[k] + t[k];
-	}
+	mvod_sim3_apply(R, t, s, pe, n);
 	mvod_mat3_mul(R, last_R, heading);
 }
 

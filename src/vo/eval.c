@@ -49,6 +49,16 @@ int mvod_umeyama(const double *src, const double *dst, int n, bool with_scale, d
 	return 0;
 }
 
+void mvod_sim3_apply(const double R[9], const double t[3], double s, double *xyz, int n)
+{
+	for (int i = 0; i < n; i++) {
+		double *p = xyz + 3 * i;
+		mvod_mat3_vec(R, p, p);
+		for (int k = 0; k < 3; k++)
+			p[k] = s * p[k] + t[k];
+	}
+}
+
 double mvod_ate_rmse(const double *src, const double *dst, int n, const double R[9],
 		     const double t[3], double s)
 {
