@@ -407,9 +407,11 @@ void draw_paths(cv::Mat &plot, const std::vector<cv::Point2d> &est,
 	}
 }
 
-cv::Mat render(const char *title, const Path &est, const double *heading, const Path &gt)
+/* Paints every pixel of canvas (CANVAS_H x CANVAS_W, BGR), which may be the caller's memory. */
+void draw_topdown(cv::Mat &canvas, const char *title, const Path &est, const double *heading,
+		  const Path &gt)
 {
-	cv::Mat canvas(CANVAS_H, CANVAS_W, CV_8UC3, WHITE);
+	canvas.setTo(WHITE);
 	/* Data is drawn in this view, so nothing spills over the ticks and labels. */
 	cv::Mat plot = canvas(PLOT_RECT);
 	View v = fit_view(est, gt);
@@ -423,6 +425,12 @@ cv::Mat render(const char *title, const Path &est, const double *heading, const 
 	draw_legend(plot, legend, {est_px, gt_px});
 	if (title)
 		draw_title(canvas, title);
+}
+
+cv::Mat render(const char *title, const Path &est, const double *heading, const Path &gt)
+{
+	cv::Mat canvas(CANVAS_H, CANVAS_W, CV_8UC3);
+	draw_topdown(canvas, title, est, heading, gt);
 	return canvas;
 }
 
@@ -659,8 +667,9 @@ extern "C" int mvod_plot_topdown_draw(struct mvod_image *out, const char *title,
 	    out->h != CANVAS_H || !paths_ok(est_xyz, n_est, gt_xyz, n_gt))
 		return -EINVAL;
 	return mvod_guarded([&] {
+		/* Straight into the caller's pixels: a redraw allocates no canvas of its own. */
 		cv::Mat dst(out->h, out->w, CV_8UC3, out->data, (size_t)out->stride);
-		render(title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}).copyTo(dst);
+		draw_topdown(dst, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt});
 		return 0;
 	});
 }

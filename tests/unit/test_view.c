@@ -135,6 +135,30 @@ static void test_plot_draw_checks_image(void **state)
 	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), -EINVAL);
 }
 
+/*
+ * The plot is drawn straight into the caller's pixels: every one of them is painted, whatever
+ * was there before (a redraw leaves nothing of the last picture), and nothing past the row's
+ * width (a wider stride's padding) is touched.
+ */
+static void test_plot_draw_paints_every_pixel(void **state)
+{
+	(void)state;
+	enum { ROW = MVOD_PLOT_WIDTH * 3, STRIDE = ROW + 64, SIZE = STRIDE * MVOD_PLOT_HEIGHT };
+	static uint8_t a[SIZE], b[SIZE];
+	memset(a, 0x00, sizeof(a));
+	memset(b, 0x5a, sizeof(b));
+	const double xyz[] = {0, 0, 0, 1, 0, 2, 3, 0, 2.5};
+	struct mvod_image img = {MVOD_PLOT_WIDTH, MVOD_PLOT_HEIGHT, STRIDE, MVOD_PIX_BGR, a};
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 3, NULL, NULL, 0), 0);
+	img.data = b;
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 3, NULL, NULL, 0), 0);
+	for (int y = 0; y < MVOD_PLOT_HEIGHT; y++) {
+		assert_memory_equal(a + y * STRIDE, b + y * STRIDE, ROW);
+		for (int k = ROW; k < STRIDE; k++)
+			assert_int_equal(b[y * STRIDE + k], 0x5a);
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -143,6 +167,7 @@ int main(void)
 		cmocka_unit_test(test_memory_fixed),
 		cmocka_unit_test(test_newest_state_and_rows),
 		cmocka_unit_test(test_plot_draw_checks_image),
+		cmocka_unit_test(test_plot_draw_paints_every_pixel),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
