@@ -67,7 +67,8 @@ int draw_plot(cv::Mat &canvas, const struct mvod_view *v, const char *title)
 	struct mvod_image img = {area.cols, area.rows, (int)area.step, MVOD_PIX_BGR, area.data};
 	std::vector<double> xyz = drawn_path(v);
 	return mvod_plot_topdown_draw(&img, title, xyz.data(), (int)xyz.size() / 3,
-				      v->poses ? v->pose.R : nullptr, nullptr, 0);
+				      v->poses ? v->pose.R : nullptr, nullptr, 0,
+				      mvod_view_unit(v, false));
 }
 
 /* The heading again, large, as on a compass: forward (+z) up, right (+x) right. */
