@@ -284,6 +284,19 @@ static void bench_free(struct bench *b)
 	mvod_config_fini(&b->cfg);
 }
 
+/* A flag of the config table that only mvod run has a use for would be ignored here: refuse it. */
+static int reject_run_only(const struct mvod_config *cfg)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++) {
+		if (!mvod_config_keys[k].run_only || !(cfg->set & (1ULL << k)))
+			continue;
+		fprintf(stderr, "%s: --%s applies only to mvod run (the bench publishes nothing over "
+				"LCM); see %s --help\n", cli_prog, mvod_config_keys[k].flag, cli_prog);
+		return -EINVAL;
+	}
+	return 0;
+}
+
 /* 0 to run, 1 when help/version was printed, -EINVAL on a usage error. */
 static int parse_cli(int argc, char **argv, struct bench *b)
 {
@@ -292,6 +305,8 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 		return -ENOMEM;
 	int ret = cli_getopt(b->argc, b->argv, bench_own_opts, parse_own, b, usage, &b->cfg,
 			     &b->quiet);
+	if (!ret)
+		ret = reject_run_only(&b->cfg);
 	if (ret)
 		return ret;
 	mvod_config_finish(&b->cfg);
