@@ -53,6 +53,7 @@ struct mvod_config_key {
 	bool odd;                  /* ints: odd, or 0 (kernel sizes) */
 	bool optional;             /* strings: empty means none (NULL) */
 	bool flag_value;           /* bools: what the flag sets */
+	bool run_only;             /* only mvod run uses it (LCM): mvod bench refuses its flag */
 	const char *const *choices; /* enums, NULL-terminated, in enum order */
 };
 

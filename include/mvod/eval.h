@@ -68,9 +68,13 @@ struct mvod_rpe {
 	double err_avg, err_max;
 };
 
-/* Accumulates the errors of one consecutive pair (estimate and ground truth, camera-to-world). */
-void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct mvod_pose *e1,
-		  const struct mvod_pose *g0, const struct mvod_pose *g1);
+/*
+ * Accumulates the errors of one consecutive pair (estimate and ground truth, camera-to-world).
+ * Returns the pair's mvod_frame_err, for a caller that also keeps it per frame (the bench).
+ */
+struct mvod_frame_err mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0,
+				   const struct mvod_pose *e1, const struct mvod_pose *g0,
+				   const struct mvod_pose *g1);
 void mvod_rpe_finish(struct mvod_rpe *acc);
 
 /*

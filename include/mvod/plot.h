@@ -27,10 +27,12 @@ int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz
 
 /*
  * The same picture drawn into out (MVOD_PIX_BGR, MVOD_PLOT_WIDTH x MVOD_PLOT_HEIGHT, borrowed
- * for the call) instead of a file, for a caller that draws more around it (mvod view).
+ * for the call) instead of a file, for a caller that draws more around it (mvod view), with
+ * the axes in unit ("m", or "units, free scale" for a path whose scale is not known).
  */
 int mvod_plot_topdown_draw(struct mvod_image *out, const char *title, const double *est_xyz,
-			   int n_est, const double heading[9], const double *gt_xyz, int n_gt);
+			   int n_est, const double heading[9], const double *gt_xyz, int n_gt,
+			   const char *unit);
 
 enum mvod_plot_style {
 	MVOD_PLOT_LINE = 0,

@@ -28,6 +28,11 @@ struct mvod_view {
 	struct mvod_pose pose;
 	int64_t frame;
 	int scale_source, frame_status;
+	/*
+	 * The newest pose that moved had its step length from ground truth (SCALE_GROUND_TRUTH):
+	 * positions are metres. Otherwise they are in a free-scale run's unit, its first step.
+	 */
+	bool metric;
 	int features, matches, inliers;
 	/* The latest status (valid once statuses > 0). */
 	struct mvod_status status;
@@ -52,6 +57,11 @@ void mvod_view_add_status(struct mvod_view *v, const struct _mvod_status_t *msg)
  * looks straight up or down.
  */
 double mvod_view_yaw_deg(const struct mvod_view *v);
+
+/*
+ * The unit of positions, for labels: "m" when metric, else "units, free scale" (short: "units").
+ */
+const char *mvod_view_unit(const struct mvod_view *v, bool brief);
 
 /* One line of the text panel: "fps" -> "29.8". */
 struct mvod_view_row {

@@ -284,6 +284,19 @@ static void bench_free(struct bench *b)
 	mvod_config_fini(&b->cfg);
 }
 
+/* A flag of the config table that only mvod run has a use for would be ignored here: refuse it. */
+static int reject_run_only(const struct mvod_config *cfg)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++) {
+		if (!mvod_config_keys[k].run_only || !(cfg->set & (1ULL << k)))
+			continue;
+		fprintf(stderr, "%s: --%s applies only to mvod run (the bench publishes nothing over "
+				"LCM); see %s --help\n", cli_prog, mvod_config_keys[k].flag, cli_prog);
+		return -EINVAL;
+	}
+	return 0;
+}
+
 /* 0 to run, 1 when help/version was printed, -EINVAL on a usage error. */
 static int parse_cli(int argc, char **argv, struct bench *b)
 {
@@ -292,6 +305,8 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 		return -ENOMEM;
 	int ret = cli_getopt(b->argc, b->argv, bench_own_opts, parse_own, b, usage, &b->cfg,
 			     &b->quiet);
+	if (!ret)
+		ret = reject_run_only(&b->cfg);
 	if (ret)
 		return ret;
 	mvod_config_finish(&b->cfg);
@@ -342,21 +357,40 @@ static int on_frame(void *ctx, const struct mvod_frame_report *f)
 	return 0;
 }
 
-/* Errors over the whole run, from the collected poses. */
+/*
+ * Errors over the whole run, from the collected poses, and the per-frame series behind them,
+ * which the plots draw: each computed once.
+ */
 struct whole_run {
 	struct mvod_rpe rpe;        /* as the summary's, on the metric estimate */
 	double drift;               /* NAN when undefined */
 	struct mvod_kitti_rel krel; /* NAN fields on paths of 100 m or less */
+	int n;                      /* frames */
+	double *pe, *pg;            /* positions, n x 3: the metric estimate, the ground truth */
+	double *dist;               /* distance along the ground truth to each frame, m */
+	double *e, *r, *d;          /* mvod_frame_err per frame; 0 for the first, which has none */
+	double *buf;                /* owns all of the above */
 };
 
-static int positions(const struct mvod_pose *p, int n, double **out)
+static int whole_run_alloc(struct whole_run *w, int n)
 {
-	*out = malloc((size_t)(n ? n : 1) * 3 * sizeof(double));
-	if (!*out)
+	size_t m = (size_t)(n ? n : 1);
+	*w = (struct whole_run){.n = n, .buf = calloc(m * 10, sizeof(double))};
+	if (!w->buf)
 		return -ENOMEM;
-	for (int i = 0; i < n; i++)
-		memcpy(*out + 3 * i, p[i].t, sizeof(p[i].t));
+	w->pe = w->buf;
+	w->pg = w->pe + 3 * m;
+	w->dist = w->pg + 3 * m;
+	w->e = w->dist + m;
+	w->r = w->e + m;
+	w->d = w->r + m;
 	return 0;
+}
+
+static void positions(const struct mvod_pose *p, int n, double *out)
+{
+	for (int i = 0; i < n; i++)
+		memcpy(out + 3 * i, p[i].t, sizeof(p[i].t));
 }
 
 /*
@@ -366,26 +400,26 @@ static int positions(const struct mvod_pose *p, int n, double **out)
  */
 static int whole_run_errors(struct collect *c, double scale, struct whole_run *w)
 {
+	int ret = whole_run_alloc(w, c->n);
+	if (ret)
+		return ret;
 	for (int i = 0; i < c->n; i++)
 		for (int k = 0; k < 3; k++)
 			c->est[i].t[k] *= isfinite(scale) ? scale : 1;
-	w->rpe = (struct mvod_rpe){0};
-	for (int i = 1; i < c->n; i++)
-		mvod_rpe_add(&w->rpe, &c->est[i - 1], &c->est[i], &c->gt[i - 1], &c->gt[i]);
+	for (int i = 1; i < c->n; i++) {
+		struct mvod_frame_err fe = mvod_rpe_add(&w->rpe, &c->est[i - 1], &c->est[i],
+							&c->gt[i - 1], &c->gt[i]);
+		w->e[i] = fe.e;
+		w->r[i] = fe.r_deg;
+		w->d[i] = fe.d_m;
+	}
 	mvod_rpe_finish(&w->rpe);
-	double *pe = NULL, *pg = NULL, *dist = malloc((size_t)(c->n ? c->n : 1) * sizeof(double));
-	int ret = -ENOMEM;
-	if (!dist || positions(c->est, c->n, &pe) || positions(c->gt, c->n, &pg))
-		goto out;
-	if (mvod_scale_drift(pe, pg, c->n, &w->drift))
+	positions(c->est, c->n, w->pe);
+	positions(c->gt, c->n, w->pg);
+	if (mvod_scale_drift(w->pe, w->pg, c->n, &w->drift))
 		w->drift = NAN;
-	mvod_kitti_segments(c->est, c->gt, c->n, dist, &w->krel);
-	ret = 0;
-out:
-	free(pe);
-	free(pg);
-	free(dist);
-	return ret;
+	mvod_kitti_segments(c->est, c->gt, c->n, w->dist, &w->krel);
+	return 0;
 }
 
 static void cell(struct row *r, enum col c, const char *fmt, double v)
@@ -513,21 +547,20 @@ static int plot_failed(const char *path, int ret)
  * Side view: height (-y, camera y points down) over the distance driven along the ground
  * truth, so a path that turns still reads left to right.
  */
-static int plot_side(const char *path, const char *title, const double *pe, const double *pg,
-		     int n)
+static int plot_side(const char *path, const char *title, const struct whole_run *w)
 {
-	double *buf = malloc((size_t)(n ? n : 1) * 3 * sizeof(double));
+	int n = w->n;
+	double *buf = malloc((size_t)(n ? n : 1) * 2 * sizeof(double));
 	if (!buf)
 		return -ENOMEM;
-	double *s = buf, *ey = buf + n, *gy = buf + 2 * n;
+	double *ey = buf, *gy = buf + n;
 	for (int i = 0; i < n; i++) {
-		s[i] = i ? s[i - 1] + mvod_vec3_dist(pg + 3 * i, pg + 3 * (i - 1)) : 0;
-		ey[i] = -pe[3 * i + 1];
-		gy[i] = -pg[3 * i + 1];
+		ey[i] = -w->pe[3 * i + 1];
+		gy[i] = -w->pg[3 * i + 1];
 	}
 	struct mvod_plot_series ser[2] = {
-		{"estimate", s, ey, n, MVOD_PLOT_LINE, NULL},
-		{"ground truth", s, gy, n, MVOD_PLOT_DASHED, NULL},
+		{"estimate", w->dist, ey, n, MVOD_PLOT_LINE, NULL},
+		{"ground truth", w->dist, gy, n, MVOD_PLOT_DASHED, NULL},
 	};
 	struct mvod_plot_panel p = {"distance along the ground truth [m]", "height, -y [m]", ser, 2, false};
 	int ret = mvod_plot_chart(path, title, &p, 1);
@@ -536,27 +569,18 @@ static int plot_side(const char *path, const char *title, const double *pe, cons
 }
 
 /* e, r and d per frame in three panels over the frame index. */
-static int plot_errors(const char *path, const char *title, const struct collect *c)
+static int plot_errors(const char *path, const char *title, const struct whole_run *w)
 {
-	int n = c->n;
-	double *buf = calloc((size_t)(n ? n : 1) * 4, sizeof(double));
-	if (!buf)
+	int n = w->n;
+	double *x = malloc((size_t)(n ? n : 1) * sizeof(double));
+	if (!x)
 		return -ENOMEM;
-	double *x = buf, *e = buf + n, *r = buf + 2 * n, *d = buf + 3 * n;
-	for (int i = 0; i < n; i++) {
+	for (int i = 0; i < n; i++)
 		x[i] = i;
-		if (i == 0)
-			continue;
-		struct mvod_frame_err fe;
-		mvod_frame_err(&c->est[i - 1], &c->est[i], &c->gt[i - 1], &c->gt[i], &fe);
-		e[i] = fe.e;
-		r[i] = fe.r_deg;
-		d[i] = fe.d_m;
-	}
 	struct mvod_plot_series s[3] = {
-		{"e = (r + d) / (0.5 + r + d)", x, e, n, MVOD_PLOT_LINE, NULL},
-		{"r: heading error", x, r, n, MVOD_PLOT_LINE, NULL},
-		{"d: step error", x, d, n, MVOD_PLOT_LINE, NULL},
+		{"e = (r + d) / (0.5 + r + d)", x, w->e, n, MVOD_PLOT_LINE, NULL},
+		{"r: heading error", x, w->r, n, MVOD_PLOT_LINE, NULL},
+		{"d: step error", x, w->d, n, MVOD_PLOT_LINE, NULL},
 	};
 	struct mvod_plot_panel p[3] = {
 		{"frame", "e", &s[0], 1, false},
@@ -564,7 +588,7 @@ static int plot_errors(const char *path, const char *title, const struct collect
 		{"frame", "d [m]", &s[2], 1, false},
 	};
 	int ret = mvod_plot_chart(path, title, p, 3);
-	free(buf);
+	free(x);
 	return ret;
 }
 
@@ -584,31 +608,26 @@ static void align(double *pe, const double *pg, int n, bool sim3, const double l
 	mvod_mat3_mul(R, last_R, heading);
 }
 
-static int run_plots(const struct bench *b, const struct collect *c, const struct row *row)
+/* Draws w's series; the estimate's positions are aligned in place, so the row comes first. */
+static int run_plots(const struct bench *b, const struct collect *c, struct whole_run *w,
+		     const struct row *row)
 {
 	char path[4096], title[256];
-	double *pe = NULL, *pg = NULL, heading[9];
+	double heading[9];
 	int ret = plot_dir(b->plots);
 	if (ret)
 		return ret;
-	if (positions(c->est, c->n, &pe) || positions(c->gt, c->n, &pg)) {
-		ret = -ENOMEM;
-		goto out;
-	}
-	align(pe, pg, c->n, b->cfg.run.vo.scale_mode == MVOD_SCALE_MODE_AUTO, c->est[c->n - 1].R,
-	      heading);
+	align(w->pe, w->pg, w->n, b->cfg.run.vo.scale_mode == MVOD_SCALE_MODE_AUTO,
+	      c->est[c->n - 1].R, heading);
 	snprintf(title, sizeof(title), "%s %s, %s features: err_avg %s, ATE %s m",
 		 row->f[C_DETECTOR], row->f[C_MATCHER], row->f[C_FEATURES], row->f[C_ERR_AVG],
 		 row->f[C_ATE_M]);
 	snprintf(path, sizeof(path), "%s/path-top.png", b->plots);
-	ret = plot_failed(path, mvod_plot_topdown(path, title, pe, c->n, heading, pg, c->n));
+	ret = plot_failed(path, mvod_plot_topdown(path, title, w->pe, w->n, heading, w->pg, w->n));
 	snprintf(path, sizeof(path), "%s/path-side.png", b->plots);
-	ret = ret ? ret : plot_failed(path, plot_side(path, title, pe, pg, c->n));
+	ret = ret ? ret : plot_failed(path, plot_side(path, title, w));
 	snprintf(path, sizeof(path), "%s/errors.png", b->plots);
-	ret = ret ? ret : plot_failed(path, plot_errors(path, title, c));
-out:
-	free(pe);
-	free(pg);
+	ret = ret ? ret : plot_failed(path, plot_errors(path, title, w));
 	return ret;
 }
 
@@ -619,7 +638,7 @@ static int bench_one(const struct bench *b)
 	o.on_frame = on_frame;
 	o.on_frame_ctx = &c;
 	struct mvod_run_summary s;
-	struct whole_run w;
+	struct whole_run w = {0};
 	struct row row;
 	int ret = mvod_run(&o, NULL, NULL, &s);
 	if (!ret && c.n < 2) {
@@ -632,10 +651,11 @@ static int bench_one(const struct bench *b)
 		fill_row(&o, &s, &w, &row);
 		ret = output_table(b, &row, 1);
 		if (b->plots) {
-			int pret = run_plots(b, &c, &row);
+			int pret = run_plots(b, &c, &w, &row);
 			ret = ret ? ret : pret;
 		}
 	}
+	free(w.buf);
 	free(c.est);
 	free(c.gt);
 	return ret;

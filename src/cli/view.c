@@ -40,9 +40,10 @@ static void usage(FILE *out)
 	fprintf(out,
 "Usage: mvod view [--lcm-url URL] [--png FILE [--every N]] [options]\n"
 "Draws what a running mvod publishes over LCM, or an LCM log of it: the path seen from\n"
-"above (x right, z forward, metres), the heading, the tracking state, mvod's frame rate and\n"
-"the rate poses arrive at, dropped frames, features and inliers, stage times, memory and\n"
-"uptime. It only subscribes: it never sends anything.\n"
+"above (x right, z forward; metres with --scale gt, else units of the first step, labelled\n"
+"free scale), the heading, the tracking state, mvod's frame rate and the rate poses arrive\n"
+"at, dropped frames, features and inliers, stage times, memory and uptime. It only\n"
+"subscribes: it never sends anything.\n"
 "\n"
 "  --lcm-url URL         LCM provider (default: $LCM_DEFAULT_URL, then LCM's default), the\n"
 "                        same as the watched mvod's; an LCM log plays back with\n"

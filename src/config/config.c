@@ -24,17 +24,14 @@ _Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
 static const char *const scale_choices[] = {"auto", "gt", NULL};
 
 #define AT(field) offsetof(struct mvod_config, field)
-#define STR(s, k, f, field) \
-	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_STRING, .offset = AT(field)}
-#define OPTSTR(s, k, f, field)                                                               \
-	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_STRING, .offset = AT(field), \
-	 .optional = true}
-#define NUM(s, k, t, field, l, h) \
-	{.section = s, .key = k, .flag = k, .type = t, .offset = AT(field), .lo = l, .hi = h}
-#define CHOICE(s, k, f, field, c) \
-	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_ENUM, .offset = AT(field), .choices = c}
-#define FLAG(s, k, f, field, v) \
-	{.section = s, .key = k, .flag = f, .type = MVOD_CONFIG_BOOL, .offset = AT(field), .flag_value = v}
+#define KEY(s, k, f, t, field) .section = s, .key = k, .flag = f, .type = t, .offset = AT(field)
+#define STR(s, k, f, field) {KEY(s, k, f, MVOD_CONFIG_STRING, field)}
+#define OPTSTR(s, k, f, field) {KEY(s, k, f, MVOD_CONFIG_STRING, field), .optional = true}
+#define NUM(s, k, t, field, l, h) {KEY(s, k, k, t, field), .lo = l, .hi = h}
+#define CHOICE(s, k, f, field, c) {KEY(s, k, f, MVOD_CONFIG_ENUM, field), .choices = c}
+#define FLAG(s, k, f, field, v) {KEY(s, k, f, MVOD_CONFIG_BOOL, field), .flag_value = v}
+/* mvod bench runs without LCM: the [lcm] keys are mvod run's alone. */
+#define LCM(k, f, t, field) KEY("lcm", k, f, t, field), .run_only = true
 
 /* The order here is the order of --print-config and of the example mvod.conf. */
 const struct mvod_config_key mvod_config_keys[] = {
@@ -53,19 +50,19 @@ const struct mvod_config_key mvod_config_keys[] = {
 	NUM("vo", "confidence", MVOD_CONFIG_DOUBLE, run.vo.ransac_conf, 0.5, 0.999999),
 	NUM("vo", "min-parallax", MVOD_CONFIG_DOUBLE, run.vo.min_parallax_px, 0, 100),
 	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1),
-	{.section = "vo", .key = "blur", .flag = "blur", .type = MVOD_CONFIG_INT,
-	 .offset = AT(run.vo.blur_ksize), .lo = 0, .hi = 99, .odd = true},
-	FLAG("lcm", "enabled", "no-lcm", lcm_enabled, false),
-	OPTSTR("lcm", "url", "lcm-url", lcm_url),
-	STR("lcm", "pose-channel", "pose-channel", pose_channel),
-	STR("lcm", "status-channel", "status-channel", status_channel),
-	NUM("lcm", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz, 0.1, 100),
+	{KEY("vo", "blur", "blur", MVOD_CONFIG_INT, run.vo.blur_ksize), .lo = 0, .hi = 99,
+	 .odd = true},
+	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false},
+	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true},
+	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel)},
+	{LCM("status-channel", "status-channel", MVOD_CONFIG_STRING, status_channel)},
+	{LCM("status-rate", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz), .lo = 0.1, .hi = 100},
 	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
 	CHOICE("output", "format", "format", run.traj_format, mvod_traj_format_names),
 	OPTSTR("output", "plot", "plot", run.plot),
 	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names),
-	{.section = "log", .key = "quiet", .flag = "quiet", .short_flag = 'q',
-	 .type = MVOD_CONFIG_BOOL, .offset = AT(quiet), .flag_value = true},
+	{KEY("log", "quiet", "quiet", MVOD_CONFIG_BOOL, quiet), .short_flag = 'q',
+	 .flag_value = true},
 };
 const int mvod_config_nkeys = sizeof(mvod_config_keys) / sizeof(mvod_config_keys[0]);
 _Static_assert(sizeof(mvod_config_keys) / sizeof(mvod_config_keys[0]) <= 64,

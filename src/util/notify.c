@@ -3,21 +3,15 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdint.h>
-#include <time.h>
 
 #include <systemd/sd-daemon.h>
+
+#include "util/clock.h"
 
 /* Only the run loop's thread calls these: plain statics are enough. */
 static double watchdog_s; /* 0: no watchdog */
 static double last_ping = -1e9, last_status = -1e9;
 static bool ready_sent;
-
-static double now_s(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + ts.tv_nsec / 1e9;
-}
 
 void mvod_notify_init(void)
 {
@@ -39,7 +33,7 @@ void mvod_notify_watchdog(void)
 	if (watchdog_s <= 0)
 		return;
 	/* systemd asks for a ping at least every half period; a third leaves room for a slow frame. */
-	double now = now_s();
+	double now = mvod_now_s();
 	if (now - last_ping < watchdog_s / 3)
 		return;
 	last_ping = now;
@@ -48,7 +42,7 @@ void mvod_notify_watchdog(void)
 
 void mvod_notify_status(bool force, const char *fmt, ...)
 {
-	double now = now_s();
+	double now = mvod_now_s();
 	if (!force && now - last_status < 1.0)
 		return;
 	last_status = now;

@@ -48,6 +48,9 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 	v->frame = msg->frame;
 	v->state = (enum mvod_track_state)msg->state;
 	v->scale_source = msg->scale_source;
+	/* A held frame (SCALE_NONE) has no step, and says nothing about the run's scale. */
+	if (msg->scale_source != MVOD_POSE_T_SCALE_NONE)
+		v->metric = msg->scale_source == MVOD_POSE_T_SCALE_GROUND_TRUTH;
 	v->frame_status = msg->frame_status;
 	v->features = msg->features;
 	v->matches = msg->matches;
@@ -87,6 +90,11 @@ double mvod_view_yaw_deg(const struct mvod_view *v)
 	return deg <= -180.0 ? 180.0 : deg;
 }
 
+const char *mvod_view_unit(const struct mvod_view *v, bool brief)
+{
+	return v->metric ? "m" : brief ? "units" : "units, free scale";
+}
+
 static void row(struct mvod_view_row *rows, int max_rows, int *n, const char *label,
 		const char *fmt, ...) __attribute__((format(printf, 5, 6)));
 
@@ -108,8 +116,9 @@ static void pose_rows(const struct mvod_view *v, int64_t now_us, struct mvod_vie
 {
 	row(rows, max, n, "frame", "%lld (%s)", (long long)v->frame,
 	    mvod_frame_status_name((enum mvod_frame_status)v->frame_status));
-	row(rows, max, n, "position [m]", "%.2f %.2f %.2f", v->pose.t[0], v->pose.t[1],
-	    v->pose.t[2]);
+	char label[sizeof(rows->label)];
+	snprintf(label, sizeof(label), "position [%s]", mvod_view_unit(v, true));
+	row(rows, max, n, label, "%.2f %.2f %.2f", v->pose.t[0], v->pose.t[1], v->pose.t[2]);
 	row(rows, max, n, "scale from", "%s",
 	    mvod_scale_source_name((enum mvod_scale_source)v->scale_source));
 	row(rows, max, n, "feat/match/inl", "%d / %d / %d", v->features, v->matches, v->inliers);

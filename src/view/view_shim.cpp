@@ -67,7 +67,8 @@ int draw_plot(cv::Mat &canvas, const struct mvod_view *v, const char *title)
 	struct mvod_image img = {area.cols, area.rows, (int)area.step, MVOD_PIX_BGR, area.data};
 	std::vector<double> xyz = drawn_path(v);
 	return mvod_plot_topdown_draw(&img, title, xyz.data(), (int)xyz.size() / 3,
-				      v->poses ? v->pose.R : nullptr, nullptr, 0);
+				      v->poses ? v->pose.R : nullptr, nullptr, 0,
+				      mvod_view_unit(v, false));
 }
 
 /* The heading again, large, as on a compass: forward (+z) up, right (+x) right. */
@@ -135,6 +136,12 @@ int render(const struct mvod_view *v, int64_t now_us, const struct mvod_view_lab
 	return 0;
 }
 
+/*
+ * The window's picture, kept from one redraw to the next (ten a second): render's create()
+ * allocates only when the size changes. One window, drawn from one thread.
+ */
+cv::Mat window_canvas;
+
 } // namespace
 
 extern "C" int mvod_view_write_png(const struct mvod_view *v, int64_t now_us,
@@ -171,11 +178,10 @@ extern "C" int mvod_view_window_show(const char *name, const struct mvod_view *v
 				     const struct mvod_view_labels *labels, int wait_ms, bool *quit)
 {
 	return mvod_guarded([&] {
-		cv::Mat canvas;
-		int ret = render(v, now_us, labels, canvas);
+		int ret = render(v, now_us, labels, window_canvas);
 		if (ret)
 			return ret;
-		cv::imshow(name, canvas);
+		cv::imshow(name, window_canvas);
 		int key = cv::waitKey(wait_ms < 1 ? 1 : wait_ms) & 0xff;
 		*quit = key == 'q' || key == 27 ||
 			cv::getWindowProperty(name, cv::WND_PROP_VISIBLE) < 1;
@@ -186,6 +192,7 @@ extern "C" int mvod_view_window_show(const char *name, const struct mvod_view *v
 extern "C" void mvod_view_window_close(const char *name)
 {
 	mvod_guarded([&] {
+		window_canvas.release();
 		cv::destroyWindow(name);
 		cv::waitKey(1);
 		return 0;

@@ -164,8 +164,9 @@ static void rpe_add_step(struct mvod_rpe *acc, const double de[3], const double 
 	}
 }
 
-void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct mvod_pose *e1,
-		  const struct mvod_pose *g0, const struct mvod_pose *g1)
+struct mvod_frame_err mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0,
+				   const struct mvod_pose *e1, const struct mvod_pose *g0,
+				   const struct mvod_pose *g1)
 {
 	struct mvod_pose de, dg;
 	relative(e0, e1, &de);
@@ -178,6 +179,7 @@ void mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0, const struct
 	struct mvod_frame_err fe;
 	mvod_frame_err(e0, e1, g0, g1, &fe);
 	tally(&acc->err_avg, &acc->err_max, fe.e);
+	return fe;
 }
 
 void mvod_rpe_finish(struct mvod_rpe *acc)

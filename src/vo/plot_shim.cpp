@@ -407,22 +407,33 @@ void draw_paths(cv::Mat &plot, const std::vector<cv::Point2d> &est,
 	}
 }
 
-cv::Mat render(const char *title, const Path &est, const double *heading, const Path &gt)
+/*
+ * Paints every pixel of canvas (CANVAS_H x CANVAS_W, BGR), which may be the caller's memory;
+ * unit: of the axes.
+ */
+void draw_topdown(cv::Mat &canvas, const char *title, const Path &est, const double *heading,
+		  const Path &gt, const std::string &unit)
 {
-	cv::Mat canvas(CANVAS_H, CANVAS_W, CV_8UC3, WHITE);
+	canvas.setTo(WHITE);
 	/* Data is drawn in this view, so nothing spills over the ticks and labels. */
 	cv::Mat plot = canvas(PLOT_RECT);
 	View v = fit_view(est, gt);
 	std::vector<cv::Point2d> est_px = project(v, est), gt_px = project(v, gt);
 	std::vector<LegendEntry> legend;
 
-	draw_axes(canvas, PLOT_RECT, v, "x [m]", "z [m]");
+	draw_axes(canvas, PLOT_RECT, v, "x [" + unit + "]", "z [" + unit + "]");
 	draw_paths(plot, est_px, gt_px, heading, legend);
 	if (est_px.empty() && gt_px.empty())
 		draw_no_data(plot, "no valid poses");
 	draw_legend(plot, legend, {est_px, gt_px});
 	if (title)
 		draw_title(canvas, title);
+}
+
+cv::Mat render(const char *title, const Path &est, const double *heading, const Path &gt)
+{
+	cv::Mat canvas(CANVAS_H, CANVAS_W, CV_8UC3);
+	draw_topdown(canvas, title, est, heading, gt, "m");
 	return canvas;
 }
 
@@ -653,14 +664,15 @@ extern "C" int mvod_plot_topdown(const char *path, const char *title, const doub
 
 extern "C" int mvod_plot_topdown_draw(struct mvod_image *out, const char *title,
 				      const double *est_xyz, int n_est, const double heading[9],
-				      const double *gt_xyz, int n_gt)
+				      const double *gt_xyz, int n_gt, const char *unit)
 {
-	if (!out || !out->data || out->fmt != MVOD_PIX_BGR || out->w != CANVAS_W ||
+	if (!unit || !out || !out->data || out->fmt != MVOD_PIX_BGR || out->w != CANVAS_W ||
 	    out->h != CANVAS_H || !paths_ok(est_xyz, n_est, gt_xyz, n_gt))
 		return -EINVAL;
 	return mvod_guarded([&] {
+		/* Straight into the caller's pixels: a redraw allocates no canvas of its own. */
 		cv::Mat dst(out->h, out->w, CV_8UC3, out->data, (size_t)out->stride);
-		render(title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}).copyTo(dst);
+		draw_topdown(dst, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}, unit);
 		return 0;
 	});
 }

@@ -207,27 +207,6 @@ void harness_wait_lines(const char *path, int n, pid_t pid)
 	}
 }
 
-int harness_statuses(const char *log, mvod_status_t *out, int max)
-{
-	lcm_eventlog_t *ev = lcm_eventlog_create(log, "r");
-	if (!ev)
-		fail_msg("cannot read the LCM log %s", log);
-	int n = 0;
-	lcm_eventlog_event_t *e;
-	while ((e = lcm_eventlog_read_next_event(ev))) {
-		if (strcmp(e->channel, "MVOD_STATUS") == 0) {
-			mvod_status_t st;
-			assert_true(mvod_status_t_decode(e->data, 0, e->datalen, &st) > 0);
-			if (n < max)
-				out[n] = st;
-			n++;
-		}
-		lcm_eventlog_free_event(e);
-	}
-	lcm_eventlog_destroy(ev);
-	return n;
-}
-
 int harness_signal_after(char *const argv[], const char *path, int lines, int sig)
 {
 	pid_t pid = harness_spawn(argv, NULL, NULL);
@@ -297,8 +276,15 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 	mvod_traj_free(&gt);
 }
 
+/* What the one log reader does with each message besides counting it; any may be NULL. */
+struct log_sink {
+	void (*on_pose)(const mvod_pose_t *msg, void *ctx);
+	void (*on_status)(const mvod_status_t *msg, void *ctx);
+	void *ctx;
+};
+
 static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
-		       void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+		       const struct log_sink *s)
 {
 	if (strcmp(e->channel, MVOD_DEFAULT_POSE_CHANNEL) == 0) {
 		mvod_pose_t p;
@@ -306,18 +292,19 @@ static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
 		c->bad += !ok;
 		c->gaps += ok && p.frame != c->last_frame + 1;
 		c->last_frame = ok ? p.frame : c->last_frame;
+		if (ok && s->on_pose)
+			s->on_pose(&p, s->ctx);
 		c->poses++;
 	} else if (strcmp(e->channel, MVOD_DEFAULT_STATUS_CHANNEL) == 0) {
 		bool ok = mvod_status_t_decode(e->data, 0, e->datalen, &c->last_status) > 0;
 		c->bad += !ok;
-		if (ok && on_status)
-			on_status(&c->last_status, ctx);
+		if (ok && s->on_status)
+			s->on_status(&c->last_status, s->ctx);
 		c->statuses++;
 	}
 }
 
-void harness_read_log(const char *path, struct log_contents *c,
-		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+static void read_log(const char *path, struct log_contents *c, const struct log_sink *s)
 {
 	memset(c, 0, sizeof(*c));
 	c->last_frame = -1;
@@ -326,8 +313,59 @@ void harness_read_log(const char *path, struct log_contents *c,
 		fail_msg("cannot read the LCM log %s", path);
 	lcm_eventlog_event_t *e;
 	while ((e = lcm_eventlog_read_next_event(ev))) {
-		read_event(e, c, on_status, ctx);
+		read_event(e, c, s);
 		lcm_eventlog_free_event(e);
 	}
 	lcm_eventlog_destroy(ev);
+}
+
+void harness_read_log(const char *path, struct log_contents *c,
+		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
+{
+	read_log(path, c, &(struct log_sink){NULL, on_status, ctx});
+}
+
+/* The first max messages of one type (size bytes each), and how many there were. */
+struct msg_list {
+	void *out;
+	size_t size;
+	int max, n;
+};
+
+static void keep(struct msg_list *l, const void *msg)
+{
+	if (l->n < l->max)
+		memcpy((char *)l->out + (size_t)l->n * l->size, msg, l->size);
+	l->n++;
+}
+
+static void keep_pose(const mvod_pose_t *msg, void *ctx)
+{
+	keep(ctx, msg);
+}
+
+static void keep_status(const mvod_status_t *msg, void *ctx)
+{
+	keep(ctx, msg);
+}
+
+static int list_messages(const char *log, bool poses, void *out, size_t size, int max)
+{
+	struct msg_list l = {out, size, max, 0};
+	struct log_sink s = {poses ? keep_pose : NULL, poses ? NULL : keep_status, &l};
+	struct log_contents c;
+	read_log(log, &c, &s);
+	if (c.bad)
+		fail_msg("%s: %d messages do not decode", log, c.bad);
+	return l.n;
+}
+
+int harness_poses(const char *log, mvod_pose_t *out, int max)
+{
+	return list_messages(log, true, out, sizeof(*out), max);
+}
+
+int harness_statuses(const char *log, mvod_status_t *out, int max)
+{
+	return list_messages(log, false, out, sizeof(*out), max);
 }

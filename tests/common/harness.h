@@ -7,6 +7,7 @@
 
 #include "mvod/eval.h"
 #include "mvod/traj.h"
+#include "mvod_pose_t.h"
 #include "mvod_status_t.h"
 
 /* Exit code meson reads as "skipped". */
@@ -47,9 +48,6 @@ int harness_traj_lines(const char *path);
 int harness_count_lines(const char *path);
 /* Waits until path has at least n lines, failing the test if pid ends first. */
 void harness_wait_lines(const char *path, int n, pid_t pid);
-/* Reads the mvod.status_t messages of an LCM log: how many, the first max of them into out. */
-struct _mvod_status_t;
-int harness_statuses(const char *log, struct _mvod_status_t *out, int max);
 
 /*
  * Starts argv (NULL-terminated; output not captured), sends it sig once path holds at least
@@ -81,5 +79,11 @@ struct log_contents {
 /* Reads the whole log (failing the test if it cannot be opened); on_status may be NULL. */
 void harness_read_log(const char *path, struct log_contents *c,
 		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx);
+/*
+ * The mvod.pose_t or mvod.status_t messages of such a log (read as harness_read_log does,
+ * failing the test if any message does not decode): how many, the first max of them into out.
+ */
+int harness_poses(const char *log, mvod_pose_t *out, int max);
+int harness_statuses(const char *log, mvod_status_t *out, int max);
 
 #endif

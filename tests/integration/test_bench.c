@@ -255,6 +255,9 @@ static void test_bad_usage(void **state)
 		{"--sweep=detector=surf", "detector"},
 		{"--sweep=colour=red", "colour"},
 		{"--sweep=features", "key=value"},
+		/* mvod run's LCM flags would be ignored: refused, by name. */
+		{"--lcm-url=memq://", "--lcm-url applies only to mvod run"},
+		{"--no-lcm", "--no-lcm applies only to mvod run"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		struct run_result r;

@@ -141,9 +141,13 @@ static void test_frame_err_pure_yaw(void **state)
 	straight(g, 10, 0);
 	straight(e, 10, a);
 	double e_sum = 0;
+	struct mvod_rpe acc = {0};
 	for (int i = 1; i < 10; i++) {
 		struct mvod_frame_err fe;
 		mvod_frame_err(&e[i - 1], &e[i], &g[i - 1], &g[i], &fe);
+		/* The accumulator hands back the very pair's error (the bench plots it per frame). */
+		struct mvod_frame_err added = mvod_rpe_add(&acc, &e[i - 1], &e[i], &g[i - 1], &g[i]);
+		assert_memory_equal(&added, &fe, sizeof(fe));
 		double d = 2 * sin(i * a / 2);
 		assert_true(fabs(fe.r_deg - 0.5) < 1e-9);
 		assert_true(fabs(fe.d_m - d) < 1e-12);

@@ -12,6 +12,7 @@
 
 #include <cmocka.h>
 
+#include "harness.h"
 #include "mvod/ipc.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
@@ -276,25 +277,6 @@ static void test_bad_url(void **state)
 	assert_null(ipc);
 }
 
-/* Counts the events of a log on channel; decodes the third pose when it is on it. */
-static int count_log_events(const char *path, const char *channel, mvod_pose_t *third)
-{
-	lcm_eventlog_t *log = lcm_eventlog_create(path, "r");
-	assert_non_null(log);
-	int n = 0;
-	lcm_eventlog_event_t *ev;
-	while ((ev = lcm_eventlog_read_next_event(log)) != NULL) {
-		if (strcmp(ev->channel, channel) == 0) {
-			if (n == 2 && third)
-				assert_true(mvod_pose_t_decode(ev->data, 0, ev->datalen, third) > 0);
-			n++;
-		}
-		lcm_eventlog_free_event(ev);
-	}
-	lcm_eventlog_destroy(log);
-	return n;
-}
-
 struct tmplog {
 	char dir[64], path[96], url[128];
 };
@@ -317,15 +299,15 @@ static void test_file_log(void **state)
 {
 	struct tmplog t;
 	struct mvod_ipc *ipc = NULL;
-	mvod_pose_t third;
+	mvod_pose_t poses[8];
 	tmplog_init(&t);
 
 	assert_int_equal(mvod_ipc_create(t.url, NULL, NULL, &ipc), 0);
 	publish_poses(ipc, 5);
 	mvod_ipc_destroy(ipc);
 
-	assert_int_equal(count_log_events(t.path, MVOD_DEFAULT_POSE_CHANNEL, &third), 5);
-	assert_pose_equal(&third, 2);
+	assert_int_equal(harness_poses(t.path, poses, 8), 5);
+	assert_pose_equal(&poses[2], 2);
 	tmplog_fini(&t);
 }
 
@@ -349,7 +331,7 @@ static void test_default_url_from_env(void **state)
 	publish_poses(ipc, 3);
 	mvod_ipc_destroy(ipc);
 
-	assert_int_equal(count_log_events(t.path, MVOD_DEFAULT_POSE_CHANNEL, NULL), 3);
+	assert_int_equal(harness_poses(t.path, NULL, 0), 3);
 	tmplog_fini(&t);
 }
 

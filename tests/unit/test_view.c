@@ -125,14 +125,92 @@ static void test_plot_draw_checks_image(void **state)
 	const double xyz[] = {0, 0, 0, 1, 0, 2};
 	struct mvod_image img = {MVOD_PLOT_WIDTH, MVOD_PLOT_HEIGHT, MVOD_PLOT_WIDTH * 3,
 				 MVOD_PIX_BGR, &px[0][0][0]};
-	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), 0);
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0, "m"), 0);
 	/* The plot's white background is there, written through the caller's view. */
 	assert_int_equal(px[0][0][0], 255);
 	img.w = 640;
-	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0, "m"), -EINVAL);
 	img.w = MVOD_PLOT_WIDTH;
 	img.fmt = MVOD_PIX_GREY;
-	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0, "m"), -EINVAL);
+}
+
+/*
+ * Positions are labelled metres only when the steps' length came from ground truth; structure,
+ * constant speed and a free-scale run's first (unit) step give units of that first step.
+ */
+static void test_unit_follows_scale_source(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	struct mvod_view_row rows[MVOD_VIEW_MAX_ROWS];
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	/* Before any pose nothing says metres. */
+	assert_string_equal(mvod_view_unit(&v, false), "units, free scale");
+	static const struct {
+		int8_t source;
+		const char *unit, *row;
+	} steps[] = {
+		{MVOD_POSE_T_SCALE_UNIT, "units, free scale", "position [units]"},
+		{MVOD_POSE_T_SCALE_STRUCTURE, "units, free scale", "position [units]"},
+		{MVOD_POSE_T_SCALE_CONSTANT_SPEED, "units, free scale", "position [units]"},
+		{MVOD_POSE_T_SCALE_GROUND_TRUTH, "m", "position [m]"},
+		/* A held frame has no step: the run is still metric. */
+		{MVOD_POSE_T_SCALE_NONE, "m", "position [m]"},
+		{MVOD_POSE_T_SCALE_STRUCTURE, "units, free scale", "position [units]"},
+		{MVOD_POSE_T_SCALE_NONE, "units, free scale", "position [units]"},
+	};
+	for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); i++) {
+		mvod_pose_t p = pose_at((double)i, 0);
+		p.scale_source = steps[i].source;
+		mvod_view_add_pose(&v, &p, 0);
+		assert_string_equal(mvod_view_unit(&v, false), steps[i].unit);
+		int n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+		char where[32];
+		snprintf(where, sizeof(where), "0.00 0.00 %zu.00", i);
+		assert_string_equal(value_of(rows, n, steps[i].row), where);
+	}
+	mvod_view_fini(&v);
+}
+
+/* The unit reaches the axes: the same path with another unit is another picture. */
+static void test_plot_draw_unit(void **state)
+{
+	(void)state;
+	static uint8_t a[MVOD_PLOT_HEIGHT][MVOD_PLOT_WIDTH][3], b[MVOD_PLOT_HEIGHT][MVOD_PLOT_WIDTH][3];
+	const double xyz[] = {0, 0, 0, 1, 0, 2};
+	struct mvod_image img = {MVOD_PLOT_WIDTH, MVOD_PLOT_HEIGHT, MVOD_PLOT_WIDTH * 3,
+				 MVOD_PIX_BGR, &a[0][0][0]};
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0, "m"), 0);
+	img.data = &b[0][0][0];
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0,
+						"units, free scale"), 0);
+	assert_true(memcmp(a, b, sizeof(a)) != 0);
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 2, NULL, NULL, 0, NULL), -EINVAL);
+}
+
+/*
+ * The plot is drawn straight into the caller's pixels: every one of them is painted, whatever
+ * was there before (a redraw leaves nothing of the last picture), and nothing past the row's
+ * width (a wider stride's padding) is touched.
+ */
+static void test_plot_draw_paints_every_pixel(void **state)
+{
+	(void)state;
+	enum { ROW = MVOD_PLOT_WIDTH * 3, STRIDE = ROW + 64, SIZE = STRIDE * MVOD_PLOT_HEIGHT };
+	static uint8_t a[SIZE], b[SIZE];
+	memset(a, 0x00, sizeof(a));
+	memset(b, 0x5a, sizeof(b));
+	const double xyz[] = {0, 0, 0, 1, 0, 2, 3, 0, 2.5};
+	struct mvod_image img = {MVOD_PLOT_WIDTH, MVOD_PLOT_HEIGHT, STRIDE, MVOD_PIX_BGR, a};
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 3, NULL, NULL, 0, "m"), 0);
+	img.data = b;
+	assert_int_equal(mvod_plot_topdown_draw(&img, "t", xyz, 3, NULL, NULL, 0, "m"), 0);
+	for (int y = 0; y < MVOD_PLOT_HEIGHT; y++) {
+		assert_memory_equal(a + y * STRIDE, b + y * STRIDE, ROW);
+		for (int k = ROW; k < STRIDE; k++)
+			assert_int_equal(b[y * STRIDE + k], 0x5a);
+	}
 }
 
 int main(void)
@@ -143,6 +221,9 @@ int main(void)
 		cmocka_unit_test(test_memory_fixed),
 		cmocka_unit_test(test_newest_state_and_rows),
 		cmocka_unit_test(test_plot_draw_checks_image),
+		cmocka_unit_test(test_plot_draw_paints_every_pixel),
+		cmocka_unit_test(test_unit_follows_scale_source),
+		cmocka_unit_test(test_plot_draw_unit),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
