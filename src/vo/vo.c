@@ -389,6 +389,12 @@ static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *
 	}
 }
 
+void mvod_vo_restart(struct mvod_vo *vo)
+{
+	vo->have_ref = 0;
+	vo->state = MVOD_STATE_INITIALIZING;
+}
+
 int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
 		    struct mvod_vo_result *res)
 {
