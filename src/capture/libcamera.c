@@ -115,7 +115,7 @@ static int lcam_open(void *priv, const char *location, char *err, size_t errlen)
 	return 0;
 }
 
-static int lcam_read(void *priv, struct mvod_frame *frame)
+static int lcam_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
 	struct lcam_source *s = priv;
 	struct mvod_lcam_frame f;
@@ -124,9 +124,9 @@ static int lcam_read(void *priv, struct mvod_frame *frame)
 		return ret;
 	frame->index = mvod_seq_next(&s->seq, f.sequence);
 	frame->utime = f.utime;
+	frame->img = into ? *into : s->grey;
 	ret = f.bad || mvod_camfmt_to_grey(s->mode.fmt, f.data, f.len, s->mode.stride, s->mjpeg,
-					   &s->grey) < 0 ? -EINVAL : 0;
-	frame->img = s->grey;
+					   &frame->img) < 0 ? -EINVAL : 0;
 	int rret = mvod_lcam_release(s->cam);
 	return rret ? rret : ret;
 }

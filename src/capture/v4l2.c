@@ -1,7 +1,8 @@
 /*
  * v4l2:/dev/videoN?width=W&height=H&fps=F&format=F&exposure=auto|N: a V4L2 capture device,
- * streamed through mmap buffers acquired once at open. Frames are converted to grey into one
- * buffer the source owns; the driver's buffer goes back to it right after.
+ * streamed through mmap buffers acquired once at open. Frames are converted to grey into the
+ * caller's buffer (the capture thread's mailbox) or one the source owns; the driver's buffer
+ * goes back to it right after.
  */
 #include "capture/v4l2.h"
 
@@ -425,17 +426,18 @@ static int64_t buffer_utime(const struct v4l2_buffer *b)
 	return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-static int take_frame(struct v4l2_source *v, const struct v4l2_buffer *b, struct mvod_frame *f)
+static int take_frame(struct v4l2_source *v, const struct v4l2_buffer *b,
+		      const struct mvod_image *into, struct mvod_frame *f)
 {
 	f->index = mvod_seq_next(&v->seq, b->sequence);
 	f->utime = buffer_utime(b);
 	const struct buffer *m = &v->buf[b->index];
 	size_t used = b->bytesused && b->bytesused <= m->len ? b->bytesused : m->len;
+	f->img = into ? *into : v->grey;
 	/* A frame the driver flags as corrupt, or one that does not convert, is lost alone. */
 	if ((b->flags & V4L2_BUF_FLAG_ERROR) ||
-	    mvod_camfmt_to_grey(v->fmt, m->start, used, v->stride, v->mjpeg, &v->grey) < 0)
+	    mvod_camfmt_to_grey(v->fmt, m->start, used, v->stride, v->mjpeg, &f->img) < 0)
 		return -EINVAL;
-	f->img = v->grey;
 	return 0;
 }
 
@@ -445,7 +447,7 @@ static int gone(int ret)
 	return ret == -EIO ? -ENODEV : ret;
 }
 
-static int v4l2_read(void *priv, struct mvod_frame *frame)
+static int v4l2_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
 	struct v4l2_source *v = priv;
 	struct pollfd p = {.fd = v->fd, .events = POLLIN};
@@ -460,7 +462,7 @@ static int v4l2_read(void *priv, struct mvod_frame *frame)
 		return gone(ret);
 	if (b.index >= v->nbuf)
 		return -EPROTO; /* a driver bug, not a disconnect */
-	ret = take_frame(v, &b, frame);
+	ret = take_frame(v, &b, into, frame);
 	int qret = xioctl(v, VIDIOC_QBUF, &b);
 	return qret ? gone(qret) : ret;
 }

@@ -503,6 +503,33 @@ static void test_formats(void **state)
 	play_format(V4L2_PIX_FMT_MJPEG, "MJPEG", 2);
 }
 
+/*
+ * A caller's buffer offered to the read (the capture thread's mailbox) gets the converted
+ * frame itself, with no copy through the source's own buffer; without one the source's is used.
+ */
+static void test_read_into(void **state)
+{
+	(void)state;
+	static const uint32_t fourcc[] = {V4L2_PIX_FMT_GREY, V4L2_PIX_FMT_YUYV};
+	for (size_t k = 0; k < sizeof(fourcc) / sizeof(fourcc[0]); k++) {
+		reset(fourcc[k]);
+		add_frame(0, 0);
+		add_frame(1, 1);
+		struct mvod_source *src = open_ok("v4l2:" DEV);
+		uint8_t buf[W * H];
+		const struct mvod_image into = {W, H, W, MVOD_PIX_GREY, buf};
+		struct mvod_frame f;
+		while (mvod_source_read_into(src, &f, &into) == -EAGAIN)
+			;
+		assert_ptr_equal(f.img.data, buf);
+		assert_int_equal(max_error(&f, 0), 0);
+		assert_int_equal(read_frame(src, &f, NULL), 0);
+		assert_ptr_not_equal(f.img.data, buf);
+		assert_int_equal(max_error(&f, 1), 0);
+		mvod_source_close(src);
+	}
+}
+
 /* Every ioctl and poll interrupted once: open goes through, a read says "no frame yet". */
 static void test_eintr(void **state)
 {
@@ -953,6 +980,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_formats),
+		cmocka_unit_test(test_read_into),
 		cmocka_unit_test(test_focus_against_calibration),
 		cmocka_unit_test(test_eintr),
 		cmocka_unit_test(test_eagain_storm),
