@@ -47,24 +47,6 @@ const struct mvod_v4l2_io mvod_v4l2_libc_io = {
 
 const struct mvod_v4l2_io *mvod_v4l2_io = &mvod_v4l2_libc_io;
 
-static const uint32_t fourccs[MVOD_CAMFMT_COUNT] = {
-	[MVOD_CAMFMT_GREY] = V4L2_PIX_FMT_GREY,
-	[MVOD_CAMFMT_YUYV] = V4L2_PIX_FMT_YUYV,
-	[MVOD_CAMFMT_NV12] = V4L2_PIX_FMT_NV12,
-	[MVOD_CAMFMT_MJPEG] = V4L2_PIX_FMT_MJPEG,
-};
-
-int mvod_v4l2_camfmt(uint32_t fourcc, enum mvod_camfmt *out)
-{
-	for (int f = 0; f < MVOD_CAMFMT_COUNT; f++) {
-		if (fourccs[f] == fourcc) {
-			*out = (enum mvod_camfmt)f;
-			return 0;
-		}
-	}
-	return -ENOENT;
-}
-
 int mvod_v4l2_xioctl(const struct mvod_v4l2_io *io, int fd, unsigned long request, void *arg)
 {
 	int r;
@@ -118,14 +100,8 @@ static int take_param(void *ctx, const char *key, const char *value, char *err, 
 		return mvod_uri_int(key, value, 1, 16384, &w->height, err, errlen);
 	if (strcmp(key, "fps") == 0)
 		return mvod_uri_positive(key, value, 1000, &w->fps, err, errlen);
-	if (strcmp(key, "format") == 0) {
-		enum mvod_camfmt f;
-		if (mvod_camfmt_parse(value, &f) < 0)
-			return mvod_errf(err, errlen, -EINVAL, "format=%s: expected one of %s", value,
-					 mvod_camfmt_known);
-		w->format = (int)f;
-		return 0;
-	}
+	if (strcmp(key, "format") == 0)
+		return mvod_camfmt_param(value, &w->format, err, errlen);
 	if (strcmp(key, "exposure") == 0) {
 		w->set_exposure = true;
 		w->exposure = -1;
@@ -165,11 +141,11 @@ static int open_device(struct v4l2_source *v, char *err, size_t errlen)
 static int pick_format(struct v4l2_source *v, uint32_t *fourcc, char *err, size_t errlen)
 {
 	enum mvod_camfmt f;
-	if (mvod_v4l2_camfmt(*fourcc, &f) == 0)
+	if (mvod_camfmt_of_fourcc(*fourcc, MVOD_CAMFMT_V4L2, &f) == 0)
 		return 0;
 	struct v4l2_fmtdesc d = {.type = V4L2_BUF_TYPE_VIDEO_CAPTURE};
 	for (; xioctl(v, VIDIOC_ENUM_FMT, &d) == 0; d.index++) {
-		if (mvod_v4l2_camfmt(d.pixelformat, &f) == 0) {
+		if (mvod_camfmt_of_fourcc(d.pixelformat, MVOD_CAMFMT_V4L2, &f) == 0) {
 			*fourcc = d.pixelformat;
 			return 0;
 		}
@@ -182,7 +158,8 @@ static int pick_format(struct v4l2_source *v, uint32_t *fourcc, char *err, size_
 static int check_format(struct v4l2_source *v, uint32_t asked, const struct v4l2_pix_format *p,
 			char *err, size_t errlen)
 {
-	if (p->pixelformat != asked || mvod_v4l2_camfmt(p->pixelformat, &v->fmt) < 0)
+	if (p->pixelformat != asked ||
+	    mvod_camfmt_of_fourcc(p->pixelformat, MVOD_CAMFMT_V4L2, &v->fmt) < 0)
 		return mvod_errf(err, errlen, -EINVAL, "%s refused format %.4s (it set %.4s): pick "
 				 "one it lists in mvod --list-cameras", v->path, (const char *)&asked,
 				 (const char *)&p->pixelformat);
@@ -212,7 +189,7 @@ static int set_format(struct v4l2_source *v, char *err, size_t errlen)
 		return mvod_errf(err, errlen, ret, "%s: cannot read its format: %s", v->path,
 				 strerror(-ret));
 	if (v->want.format >= 0)
-		f.fmt.pix.pixelformat = fourccs[v->want.format];
+		f.fmt.pix.pixelformat = mvod_camfmt_fourcc(v->want.format, MVOD_CAMFMT_V4L2);
 	else if ((ret = pick_format(v, &f.fmt.pix.pixelformat, err, errlen)) < 0)
 		return ret;
 	if (v->want.width)
