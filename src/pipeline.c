@@ -455,17 +455,19 @@ static void report_down(struct run *r)
 		publish_status(r, &r->last_frame, &r->last_res);
 }
 
-/* The source came back: what the VO knew of the scene is stale, so tracking starts over. */
-static int restart_vo(struct run *r, int epoch)
+/*
+ * The source came back: what the VO knew of the scene is stale, so tracking starts over, but
+ * from the last pose, so that a robot integrating the poses sees no jump back to the origin.
+ */
+static void restart_vo(struct run *r, const struct mvod_frame *f, int epoch)
 {
-	mvod_vo_destroy(r->vo);
-	r->vo = NULL;
-	int ret = mvod_vo_create(&r->o->vo, &r->cam, &r->vo);
-	if (ret)
-		LOG(ERROR, "cannot set up visual odometry again: %s", strerror(-ret));
+	mvod_vo_restart(r->vo);
 	r->epoch = epoch;
 	r->prev_had_gt = 0;
-	return ret;
+	const double *t = r->last_res.pose.t;
+	LOG(INFO, "frame %lld: tracking re-initialised after the source came back; poses go on "
+		  "from the last one, at (%.3f, %.3f, %.3f)",
+	    (long long)f->index, t[0], t[1], t[2]);
 }
 
 /*
@@ -496,8 +498,8 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 			return 0;
 		if (ret)
 			return read_failed(r, ret);
-		if (epoch != r->epoch && (ret = restart_vo(r, epoch)))
-			return ret;
+		if (epoch != r->epoch)
+			restart_vo(r, &f, epoch);
 		/* Logged by the capture thread; status carries it from this frame on. */
 		if (mvod_capture_saw_unreadable(r->cap))
 			fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);

@@ -45,9 +45,11 @@ struct mvod_source_ops {
 	/*
 	 * 0 = a frame, -ENODATA = end of stream, -EAGAIN = no frame yet, -EINVAL = one bad frame
 	 * (skipped), -ENODEV = the device is gone (a live source is reopened), other -errno =
-	 * failure.
+	 * failure. into is NULL or a grey image of the source's size, borrowed for the call: a
+	 * source that converts camera buffers writes the frame there instead of into its own
+	 * buffer, and frame->img views it. Sources that decode elsewhere ignore it.
 	 */
-	int (*read)(void *priv, struct mvod_frame *frame);
+	int (*read)(void *priv, struct mvod_frame *frame, const struct mvod_image *into);
 	void (*info)(void *priv, struct mvod_source_info *info);
 	/* Intrinsics the source carries (KITTI calib.txt); -ENOENT when it has none. May be NULL. */
 	int (*camera)(void *priv, struct mvod_camera *cam);
@@ -59,6 +61,12 @@ struct mvod_source;
 /* Opens a source from a URI such as "file:clip.mkv". -EPROTONOSUPPORT for an unknown scheme. */
 int mvod_source_open(const char *uri, struct mvod_source **out, char *err, size_t errlen);
 int mvod_source_read(struct mvod_source *src, struct mvod_frame *frame);
+/*
+ * The same, offering into (see mvod_source_ops.read) to save a copy: frame->img.data ==
+ * into->data when the source converted into it.
+ */
+int mvod_source_read_into(struct mvod_source *src, struct mvod_frame *frame,
+			  const struct mvod_image *into);
 void mvod_source_info(struct mvod_source *src, struct mvod_source_info *info);
 int mvod_source_camera(struct mvod_source *src, struct mvod_camera *cam);
 /* Closes and frees; NULL is a no-op. */

@@ -149,6 +149,15 @@ void mvod_vo_destroy(struct mvod_vo *vo);
 int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
 		    struct mvod_vo_result *res);
 
+/*
+ * Forgets the scene (the reference frame and its structure) after a gap in the frames, such as
+ * a camera that went away and came back; the next frame starts tracking again (INITIALIZING).
+ * The pose is kept, so the poses that follow continue from the last one instead of jumping to
+ * the identity, and the first step after is scaled by the last step's length (constant speed),
+ * as after a loss of tracking. Does not allocate.
+ */
+void mvod_vo_restart(struct mvod_vo *vo);
+
 #ifdef __cplusplus
 }
 #endif

@@ -8,28 +8,60 @@
 #include <strings.h>
 
 #include <jpeglib.h>
+#include <linux/videodev2.h>
 
-static const char *const names[MVOD_CAMFMT_COUNT] = {"GREY", "YUYV", "NV12", "MJPEG"};
+#include "util/errbuf.h"
+
+#define FOURCC(a, b, c, d) \
+	((uint32_t)(a) | ((uint32_t)(b) << 8) | ((uint32_t)(c) << 16) | ((uint32_t)(d) << 24))
+
+/* Each format's name, and its fourcc in each enum mvod_camfmt_api. */
+static const struct {
+	const char *name;
+	uint32_t fourcc[2];
+} formats[MVOD_CAMFMT_COUNT] = {
+	[MVOD_CAMFMT_GREY] = {"GREY", {V4L2_PIX_FMT_GREY, FOURCC('R', '8', ' ', ' ')}},
+	[MVOD_CAMFMT_YUYV] = {"YUYV", {V4L2_PIX_FMT_YUYV, FOURCC('Y', 'U', 'Y', 'V')}},
+	[MVOD_CAMFMT_NV12] = {"NV12", {V4L2_PIX_FMT_NV12, FOURCC('N', 'V', '1', '2')}},
+	[MVOD_CAMFMT_MJPEG] = {"MJPEG", {V4L2_PIX_FMT_MJPEG, FOURCC('M', 'J', 'P', 'G')}},
+};
 const char mvod_camfmt_known[] = "GREY, YUYV, NV12, MJPEG";
 
 const char *mvod_camfmt_name(enum mvod_camfmt f)
 {
-	return f >= 0 && f < MVOD_CAMFMT_COUNT ? names[f] : "?";
+	return f >= 0 && f < MVOD_CAMFMT_COUNT ? formats[f].name : "?";
 }
 
-int mvod_camfmt_parse(const char *name, enum mvod_camfmt *out)
+int mvod_camfmt_param(const char *value, int *format, char *err, size_t errlen)
 {
 	for (int f = 0; f < MVOD_CAMFMT_COUNT; f++) {
-		if (strcasecmp(name, names[f]) == 0) {
+		if (strcasecmp(value, formats[f].name) == 0) {
+			*format = f;
+			return 0;
+		}
+	}
+	if (strcasecmp(value, "MJPG") == 0) {
+		*format = MVOD_CAMFMT_MJPEG;
+		return 0;
+	}
+	return mvod_errf(err, errlen, -EINVAL, "format=%s: expected one of %s", value,
+			 mvod_camfmt_known);
+}
+
+uint32_t mvod_camfmt_fourcc(enum mvod_camfmt f, enum mvod_camfmt_api api)
+{
+	return f >= 0 && f < MVOD_CAMFMT_COUNT ? formats[f].fourcc[api] : 0;
+}
+
+int mvod_camfmt_of_fourcc(uint32_t fourcc, enum mvod_camfmt_api api, enum mvod_camfmt *out)
+{
+	for (int f = 0; f < MVOD_CAMFMT_COUNT; f++) {
+		if (formats[f].fourcc[api] == fourcc) {
 			*out = (enum mvod_camfmt)f;
 			return 0;
 		}
 	}
-	if (strcasecmp(name, "MJPG") == 0) {
-		*out = MVOD_CAMFMT_MJPEG;
-		return 0;
-	}
-	return -EINVAL;
+	return -ENOENT;
 }
 
 size_t mvod_camfmt_frame_bytes(enum mvod_camfmt f, int stride, int h)

@@ -23,12 +23,25 @@ enum mvod_camfmt {
 	MVOD_CAMFMT_COUNT,
 };
 
+/* The camera APIs, each naming the formats by its own fourccs. */
+enum mvod_camfmt_api {
+	MVOD_CAMFMT_V4L2 = 0,      /* V4L2_PIX_FMT_*: GREY, YUYV, NV12, MJPG */
+	MVOD_CAMFMT_LIBCAMERA = 1, /* DRM fourccs: R8, YUYV, NV12, MJPG */
+};
+
 /* "GREY", "YUYV", "NV12", "MJPEG" (what users write in format=). */
 const char *mvod_camfmt_name(enum mvod_camfmt f);
-/* Case-insensitive; MJPG is taken for MJPEG. -EINVAL for anything else. */
-int mvod_camfmt_parse(const char *name, enum mvod_camfmt *out);
+/*
+ * A source URI's format=value (case-insensitive; MJPG is taken for MJPEG) into *format, an
+ * enum mvod_camfmt. -EINVAL with the reason, naming the choices, in err.
+ */
+int mvod_camfmt_param(const char *value, int *format, char *err, size_t errlen);
 /* "GREY, YUYV, NV12, MJPEG", for messages. */
 extern const char mvod_camfmt_known[];
+/* f's fourcc in api; 0 for none. */
+uint32_t mvod_camfmt_fourcc(enum mvod_camfmt f, enum mvod_camfmt_api api);
+/* The format api's fourcc names; -ENOENT for one mvod does not read. */
+int mvod_camfmt_of_fourcc(uint32_t fourcc, enum mvod_camfmt_api api, enum mvod_camfmt *out);
 
 /*
  * Bytes of one w x h frame whose luma rows are stride bytes apart (0 for MJPEG, whose size

@@ -1,4 +1,8 @@
-/* The capture thread of live sources: read, copy into the mailbox, reopen what went down. */
+/*
+ * The capture thread of live sources: read into the mailbox, reopen what went down. Cameras
+ * convert their buffers straight into the mailbox's free letter; sources that decode into
+ * buffers of their own (file:?realtime=1) are copied there once.
+ */
 #include "mvod/capture.h"
 
 #include <errno.h>
@@ -50,13 +54,13 @@ static bool sleep_unless_stopped(struct mvod_capture *c, int ms)
 	return s;
 }
 
-static void deliver(struct mvod_capture *c, const struct mvod_frame *f)
+/* Posts f, read into letter l (or, from a source with buffers of its own, copied there). */
+static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct mvod_frame *f)
 {
-	struct mvod_letter *l = mvod_mailbox_back(&c->mb);
 	const struct mvod_image *in = &f->img;
 	size_t row = (size_t)in->w * (in->fmt == MVOD_PIX_BGR ? 3 : 1);
 	uint8_t *data = l->frame.img.data;
-	for (int y = 0; y < in->h; y++)
+	for (int y = 0; in->data != data && y < in->h; y++)
 		memcpy(data + (size_t)y * row, in->data + (size_t)y * (size_t)in->stride, row);
 	l->frame.img = (struct mvod_image){.w = in->w, .h = in->h, .stride = (int)row,
 					   .fmt = in->fmt, .data = data};
@@ -111,10 +115,14 @@ static int step(struct mvod_capture *c)
 		reopen(c);
 		return -EAGAIN;
 	}
+	struct mvod_letter *l = mvod_mailbox_back(&c->mb);
+	const struct mvod_image into = {.w = c->info.width, .h = c->info.height,
+					.stride = c->info.width, .fmt = MVOD_PIX_GREY,
+					.data = l->frame.img.data};
 	struct mvod_frame f = {0};
-	int ret = mvod_source_read(c->src, &f);
+	int ret = mvod_source_read_into(c->src, &f, &into);
 	if (ret == 0)
-		deliver(c, &f);
+		deliver(c, l, &f);
 	if (ret == -EINVAL && !atomic_exchange(&c->saw_bad, true))
 		LOG(WARN, "%s: skipping frames that cannot be decoded at their size (counted as "
 			  "dropped)", c->uri);

@@ -148,8 +148,9 @@ static int paced_read(struct file_source *fs, struct mvod_frame *frame)
 	return 0;
 }
 
-static int file_read(void *priv, struct mvod_frame *frame)
+static int file_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
+	(void)into; /* FFmpeg and OpenCV decode into their own buffer */
 	struct file_source *fs = priv;
 	return fs->realtime ? paced_read(fs, frame) : decode_next(fs, frame);
 }

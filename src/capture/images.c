@@ -274,8 +274,9 @@ fail:
 	return ret;
 }
 
-int mvod_images_read(void *priv, struct mvod_frame *frame)
+int mvod_images_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
+	(void)into; /* images decode into their own buffer */
 	struct mvod_images *im = priv;
 	if (im->next >= im->n)
 		return -ENODATA;

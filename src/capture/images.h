@@ -33,7 +33,7 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
  * The ops on an open struct mvod_images (priv), shared by every backend built on it. read
  * gives -EINVAL for an image it cannot read or decode, and the next read goes on after it.
  */
-int mvod_images_read(void *priv, struct mvod_frame *frame);
+int mvod_images_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into);
 void mvod_images_info(void *priv, struct mvod_source_info *info);
 void mvod_images_close(void *priv);
 

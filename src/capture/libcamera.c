@@ -13,32 +13,6 @@
 #include "capture/backends.h"
 #include "capture/uri.h"
 
-#define FOURCC(a, b, c, d) \
-	((uint32_t)(a) | ((uint32_t)(b) << 8) | ((uint32_t)(c) << 16) | ((uint32_t)(d) << 24))
-
-static const uint32_t fourccs[MVOD_CAMFMT_COUNT] = {
-	[MVOD_CAMFMT_GREY] = FOURCC('R', '8', ' ', ' '),
-	[MVOD_CAMFMT_YUYV] = FOURCC('Y', 'U', 'Y', 'V'),
-	[MVOD_CAMFMT_NV12] = FOURCC('N', 'V', '1', '2'),
-	[MVOD_CAMFMT_MJPEG] = FOURCC('M', 'J', 'P', 'G'),
-};
-
-uint32_t mvod_lcam_fourcc(enum mvod_camfmt f)
-{
-	return f >= 0 && f < MVOD_CAMFMT_COUNT ? fourccs[f] : 0;
-}
-
-int mvod_lcam_camfmt(uint32_t fourcc, enum mvod_camfmt *out)
-{
-	for (int f = 0; f < MVOD_CAMFMT_COUNT; f++) {
-		if (fourccs[f] == fourcc) {
-			*out = (enum mvod_camfmt)f;
-			return 0;
-		}
-	}
-	return -ENOENT;
-}
-
 static int take_param(void *ctx, const char *key, const char *value, char *err, size_t errlen)
 {
 	struct mvod_lcam_want *w = ctx;
@@ -46,14 +20,8 @@ static int take_param(void *ctx, const char *key, const char *value, char *err, 
 		return mvod_uri_int(key, value, 1, 16384, &w->width, err, errlen);
 	if (strcmp(key, "height") == 0)
 		return mvod_uri_int(key, value, 1, 16384, &w->height, err, errlen);
-	if (strcmp(key, "format") == 0) {
-		enum mvod_camfmt f;
-		if (mvod_camfmt_parse(value, &f) < 0)
-			return mvod_errf(err, errlen, -EINVAL, "format=%s: expected one of %s", value,
-					 mvod_camfmt_known);
-		w->format = (int)f;
-		return 0;
-	}
+	if (strcmp(key, "format") == 0)
+		return mvod_camfmt_param(value, &w->format, err, errlen);
 	return mvod_uri_unknown(key, "width, height, format", err, errlen);
 }
 
@@ -115,7 +83,7 @@ static int lcam_open(void *priv, const char *location, char *err, size_t errlen)
 	return 0;
 }
 
-static int lcam_read(void *priv, struct mvod_frame *frame)
+static int lcam_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
 	struct lcam_source *s = priv;
 	struct mvod_lcam_frame f;
@@ -124,9 +92,9 @@ static int lcam_read(void *priv, struct mvod_frame *frame)
 		return ret;
 	frame->index = mvod_seq_next(&s->seq, f.sequence);
 	frame->utime = f.utime;
+	frame->img = into ? *into : s->grey;
 	ret = f.bad || mvod_camfmt_to_grey(s->mode.fmt, f.data, f.len, s->mode.stride, s->mjpeg,
-					   &s->grey) < 0 ? -EINVAL : 0;
-	frame->img = s->grey;
+					   &frame->img) < 0 ? -EINVAL : 0;
 	int rret = mvod_lcam_release(s->cam);
 	return rret ? rret : ret;
 }

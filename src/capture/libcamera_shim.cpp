@@ -100,14 +100,14 @@ static int configure(mvod_lcam *c, const mvod_lcam_want *w, mvod_lcam_mode *mode
 				 c->cam->id().c_str());
 	StreamConfiguration &sc = c->config->at(0);
 	enum mvod_camfmt f = w->format >= 0 ? (enum mvod_camfmt)w->format : MVOD_CAMFMT_YUYV;
-	sc.pixelFormat = PixelFormat(mvod_lcam_fourcc(f));
+	sc.pixelFormat = PixelFormat(mvod_camfmt_fourcc(f, MVOD_CAMFMT_LIBCAMERA));
 	if (w->width)
 		sc.size.width = (unsigned)w->width;
 	if (w->height)
 		sc.size.height = (unsigned)w->height;
 	Size asked = sc.size;
 	if (c->config->validate() == CameraConfiguration::Invalid ||
-	    mvod_lcam_camfmt(sc.pixelFormat.fourcc(), &mode->fmt) < 0 ||
+	    mvod_camfmt_of_fourcc(sc.pixelFormat.fourcc(), MVOD_CAMFMT_LIBCAMERA, &mode->fmt) < 0 ||
 	    (w->format >= 0 && mode->fmt != f) || sc.size != asked)
 		return mvod_errf(err, errlen, -EINVAL, "libcamera camera %s cannot deliver %ux%u %s "
 				 "(it offers %s): pick a mode from mvod --list-cameras",

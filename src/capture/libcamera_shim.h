@@ -54,10 +54,6 @@ void mvod_lcam_close(struct mvod_lcam *c);
 /* Prints the cameras (index, id, model) with their --source URIs; returns how many. */
 int mvod_lcam_list(FILE *out);
 
-/* libcamera names formats by DRM fourcc: R8, YUYV, NV12, MJPG. 0 for none. */
-uint32_t mvod_lcam_fourcc(enum mvod_camfmt f);
-/* -ENOENT for a fourcc mvod does not read. */
-int mvod_lcam_camfmt(uint32_t fourcc, enum mvod_camfmt *out);
 /* Parses the location of a libcamera: URI ("0", "/base/...imx219@10?width=640"). */
 int mvod_lcam_parse(const char *location, struct mvod_lcam_want *want, char *err, size_t errlen);
 

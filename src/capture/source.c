@@ -116,7 +116,13 @@ fail:
 
 int mvod_source_read(struct mvod_source *src, struct mvod_frame *frame)
 {
-	int ret = src->ops->read(src->priv, frame);
+	return mvod_source_read_into(src, frame, NULL);
+}
+
+int mvod_source_read_into(struct mvod_source *src, struct mvod_frame *frame,
+			  const struct mvod_image *into)
+{
+	int ret = src->ops->read(src->priv, frame, into);
 	/* Everything downstream is sized from info at start-up; a frame of another size is bad. */
 	if (ret == 0 && (frame->img.w != src->info.width || frame->img.h != src->info.height))
 		return -EINVAL;

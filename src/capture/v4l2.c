@@ -1,7 +1,8 @@
 /*
  * v4l2:/dev/videoN?width=W&height=H&fps=F&format=F&exposure=auto|N: a V4L2 capture device,
- * streamed through mmap buffers acquired once at open. Frames are converted to grey into one
- * buffer the source owns; the driver's buffer goes back to it right after.
+ * streamed through mmap buffers acquired once at open. Frames are converted to grey into the
+ * caller's buffer (the capture thread's mailbox) or one the source owns; the driver's buffer
+ * goes back to it right after.
  */
 #include "capture/v4l2.h"
 
@@ -45,24 +46,6 @@ const struct mvod_v4l2_io mvod_v4l2_libc_io = {
 };
 
 const struct mvod_v4l2_io *mvod_v4l2_io = &mvod_v4l2_libc_io;
-
-static const uint32_t fourccs[MVOD_CAMFMT_COUNT] = {
-	[MVOD_CAMFMT_GREY] = V4L2_PIX_FMT_GREY,
-	[MVOD_CAMFMT_YUYV] = V4L2_PIX_FMT_YUYV,
-	[MVOD_CAMFMT_NV12] = V4L2_PIX_FMT_NV12,
-	[MVOD_CAMFMT_MJPEG] = V4L2_PIX_FMT_MJPEG,
-};
-
-int mvod_v4l2_camfmt(uint32_t fourcc, enum mvod_camfmt *out)
-{
-	for (int f = 0; f < MVOD_CAMFMT_COUNT; f++) {
-		if (fourccs[f] == fourcc) {
-			*out = (enum mvod_camfmt)f;
-			return 0;
-		}
-	}
-	return -ENOENT;
-}
 
 int mvod_v4l2_xioctl(const struct mvod_v4l2_io *io, int fd, unsigned long request, void *arg)
 {
@@ -117,14 +100,8 @@ static int take_param(void *ctx, const char *key, const char *value, char *err, 
 		return mvod_uri_int(key, value, 1, 16384, &w->height, err, errlen);
 	if (strcmp(key, "fps") == 0)
 		return mvod_uri_positive(key, value, 1000, &w->fps, err, errlen);
-	if (strcmp(key, "format") == 0) {
-		enum mvod_camfmt f;
-		if (mvod_camfmt_parse(value, &f) < 0)
-			return mvod_errf(err, errlen, -EINVAL, "format=%s: expected one of %s", value,
-					 mvod_camfmt_known);
-		w->format = (int)f;
-		return 0;
-	}
+	if (strcmp(key, "format") == 0)
+		return mvod_camfmt_param(value, &w->format, err, errlen);
 	if (strcmp(key, "exposure") == 0) {
 		w->set_exposure = true;
 		w->exposure = -1;
@@ -164,11 +141,11 @@ static int open_device(struct v4l2_source *v, char *err, size_t errlen)
 static int pick_format(struct v4l2_source *v, uint32_t *fourcc, char *err, size_t errlen)
 {
 	enum mvod_camfmt f;
-	if (mvod_v4l2_camfmt(*fourcc, &f) == 0)
+	if (mvod_camfmt_of_fourcc(*fourcc, MVOD_CAMFMT_V4L2, &f) == 0)
 		return 0;
 	struct v4l2_fmtdesc d = {.type = V4L2_BUF_TYPE_VIDEO_CAPTURE};
 	for (; xioctl(v, VIDIOC_ENUM_FMT, &d) == 0; d.index++) {
-		if (mvod_v4l2_camfmt(d.pixelformat, &f) == 0) {
+		if (mvod_camfmt_of_fourcc(d.pixelformat, MVOD_CAMFMT_V4L2, &f) == 0) {
 			*fourcc = d.pixelformat;
 			return 0;
 		}
@@ -181,7 +158,8 @@ static int pick_format(struct v4l2_source *v, uint32_t *fourcc, char *err, size_
 static int check_format(struct v4l2_source *v, uint32_t asked, const struct v4l2_pix_format *p,
 			char *err, size_t errlen)
 {
-	if (p->pixelformat != asked || mvod_v4l2_camfmt(p->pixelformat, &v->fmt) < 0)
+	if (p->pixelformat != asked ||
+	    mvod_camfmt_of_fourcc(p->pixelformat, MVOD_CAMFMT_V4L2, &v->fmt) < 0)
 		return mvod_errf(err, errlen, -EINVAL, "%s refused format %.4s (it set %.4s): pick "
 				 "one it lists in mvod --list-cameras", v->path, (const char *)&asked,
 				 (const char *)&p->pixelformat);
@@ -211,7 +189,7 @@ static int set_format(struct v4l2_source *v, char *err, size_t errlen)
 		return mvod_errf(err, errlen, ret, "%s: cannot read its format: %s", v->path,
 				 strerror(-ret));
 	if (v->want.format >= 0)
-		f.fmt.pix.pixelformat = fourccs[v->want.format];
+		f.fmt.pix.pixelformat = mvod_camfmt_fourcc(v->want.format, MVOD_CAMFMT_V4L2);
 	else if ((ret = pick_format(v, &f.fmt.pix.pixelformat, err, errlen)) < 0)
 		return ret;
 	if (v->want.width)
@@ -425,17 +403,18 @@ static int64_t buffer_utime(const struct v4l2_buffer *b)
 	return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-static int take_frame(struct v4l2_source *v, const struct v4l2_buffer *b, struct mvod_frame *f)
+static int take_frame(struct v4l2_source *v, const struct v4l2_buffer *b,
+		      const struct mvod_image *into, struct mvod_frame *f)
 {
 	f->index = mvod_seq_next(&v->seq, b->sequence);
 	f->utime = buffer_utime(b);
 	const struct buffer *m = &v->buf[b->index];
 	size_t used = b->bytesused && b->bytesused <= m->len ? b->bytesused : m->len;
+	f->img = into ? *into : v->grey;
 	/* A frame the driver flags as corrupt, or one that does not convert, is lost alone. */
 	if ((b->flags & V4L2_BUF_FLAG_ERROR) ||
-	    mvod_camfmt_to_grey(v->fmt, m->start, used, v->stride, v->mjpeg, &v->grey) < 0)
+	    mvod_camfmt_to_grey(v->fmt, m->start, used, v->stride, v->mjpeg, &f->img) < 0)
 		return -EINVAL;
-	f->img = v->grey;
 	return 0;
 }
 
@@ -445,7 +424,7 @@ static int gone(int ret)
 	return ret == -EIO ? -ENODEV : ret;
 }
 
-static int v4l2_read(void *priv, struct mvod_frame *frame)
+static int v4l2_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
 	struct v4l2_source *v = priv;
 	struct pollfd p = {.fd = v->fd, .events = POLLIN};
@@ -460,7 +439,7 @@ static int v4l2_read(void *priv, struct mvod_frame *frame)
 		return gone(ret);
 	if (b.index >= v->nbuf)
 		return -EPROTO; /* a driver bug, not a disconnect */
-	ret = take_frame(v, &b, frame);
+	ret = take_frame(v, &b, into, frame);
 	int qret = xioctl(v, VIDIOC_QBUF, &b);
 	return qret ? gone(qret) : ret;
 }

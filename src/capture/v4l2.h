@@ -29,8 +29,6 @@ extern const struct mvod_v4l2_io *mvod_v4l2_io;
 
 /* ioctl through io, retried while a signal interrupts it. 0 or -errno. */
 int mvod_v4l2_xioctl(const struct mvod_v4l2_io *io, int fd, unsigned long request, void *arg);
-/* The camera format of a V4L2 fourcc; -ENOENT for one mvod does not read. */
-int mvod_v4l2_camfmt(uint32_t fourcc, enum mvod_camfmt *out);
 
 /*
  * Prints every V4L2 capture device among /dev/video0../dev/video63 (name, driver, bus, and each

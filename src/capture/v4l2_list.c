@@ -80,7 +80,7 @@ static void print_formats(const struct mvod_v4l2_io *io, int fd, const char *pat
 	struct example ex = {.format = -1};
 	for (; mvod_v4l2_xioctl(io, fd, VIDIOC_ENUM_FMT, &d) == 0; d.index++) {
 		enum mvod_camfmt f;
-		bool ours = mvod_v4l2_camfmt(d.pixelformat, &f) == 0;
+		bool ours = mvod_camfmt_of_fourcc(d.pixelformat, MVOD_CAMFMT_V4L2, &f) == 0;
 		fprintf(out, "    %.4s (%s)%s\n", (const char *)&d.pixelformat,
 			(const char *)d.description, ours ? "" : ": mvod does not read this format");
 		if (!ours)

@@ -307,27 +307,35 @@ static void apply_motion(struct mvod_vo *vo, const double R[9], const double t[3
 	mvod_pose_compose(&vo->ref->pose, &inv, &vo->pose);
 }
 
-/*
- * A camera that only rotates (or stands still) gives a degenerate essential matrix: any t
- * fits. So the rotation-only model is tried first; if it explains the flow to within
- * min_parallax_px, the frame is a rotation and translation is left alone.
- */
-static bool rotation_only(struct mvod_vo *vo, int n, bool force, struct mvod_vo_result *res)
+/* The rotation-only model of this frame's matches: how many inliers it has, and R. */
+struct rotation {
+	double R[9];
+	int inliers;
+};
+
+static void fit_rotation(struct mvod_vo *vo, int n, struct rotation *rot)
 {
-	double f = 0.5 * (vo->cam.fx + vo->cam.fy), R[9];
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
 	double thresh = (vo->p.min_parallax_px + vo->p.ransac_px) / f;
-	int inl = mvod_motion_rotation_ransac(vo->x1, vo->x2, n, thresh, 64, vo->mask, R);
-	if (inl < vo->p.min_inliers)
-		return false;
-	if (!force && rotation_free_parallax(vo, R, n) >= vo->p.min_parallax_px)
-		return false;
-	double t0[3] = {0, 0, 0};
-	apply_motion(vo, R, t0, 0.0);
-	res->inliers = inl;
-	res->scale_source = MVOD_SCALE_NONE;
-	return true;
+	rot->inliers = mvod_motion_rotation_ransac(vo->x1, vo->x2, n, thresh, 64, vo->mask, rot->R);
 }
 
+static enum mvod_frame_status apply_rotation(struct mvod_vo *vo, const struct rotation *rot,
+					     struct mvod_vo_result *res)
+{
+	double t0[3] = {0, 0, 0};
+	apply_motion(vo, rot->R, t0, 0.0);
+	res->inliers = rot->inliers;
+	res->scale_source = MVOD_SCALE_NONE;
+	return MVOD_FRAME_ROTATION;
+}
+
+/*
+ * A camera that only rotates (or stands still) gives a degenerate essential matrix: any t
+ * fits. So the rotation-only model is fitted first; if it explains the flow to within
+ * min_parallax_px, the frame is a rotation and translation is left alone. The same fit serves
+ * a frame whose translation turns out unknowable (a near tie below).
+ */
 static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 				       struct mvod_vo_result *res)
 {
@@ -336,8 +344,11 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 		normalise(&vo->cam, &vo->ref->f.kp[vo->matches[i].a], vo->x1 + 2 * i);
 		normalise(&vo->cam, &vo->cur->f.kp[vo->matches[i].b], vo->x2 + 2 * i);
 	}
-	if (rotation_only(vo, n, false, res))
-		return MVOD_FRAME_ROTATION;
+	struct rotation rot;
+	fit_rotation(vo, n, &rot);
+	bool rot_ok = rot.inliers >= vo->p.min_inliers;
+	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < vo->p.min_parallax_px)
+		return apply_rotation(vo, &rot, res);
 	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
 	double E[9], R1[9], R2[9], tu[3], R[9], t[3];
 	int inl = 0;
@@ -357,7 +368,7 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 	 * infinity for the direction to be known. Keep the rotation, wait for more parallax.
 	 */
 	if (res->inliers < 2 * runner_up)
-		return rotation_only(vo, n, true, res) ? MVOD_FRAME_ROTATION : MVOD_FRAME_FEW_INLIERS;
+		return rot_ok ? apply_rotation(vo, &rot, res) : MVOD_FRAME_FEW_INLIERS;
 	double s = step_length(vo, n, gt, &res->scale_source);
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);
@@ -387,6 +398,12 @@ static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *
 	} else if (vo->state == MVOD_STATE_TRACKING) {
 		vo->state = MVOD_STATE_LOST;
 	}
+}
+
+void mvod_vo_restart(struct mvod_vo *vo)
+{
+	vo->have_ref = 0;
+	vo->state = MVOD_STATE_INITIALIZING;
 }
 
 int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,

@@ -77,13 +77,14 @@ static void test_formats(void **state)
 	for (size_t i = 0; i < sizeof(map) / sizeof(map[0]); i++) {
 		uint32_t cc;
 		memcpy(&cc, map[i].code, 4);
-		assert_int_equal(mvod_lcam_fourcc(map[i].f), cc);
+		assert_int_equal(mvod_camfmt_fourcc(map[i].f, MVOD_CAMFMT_LIBCAMERA), cc);
 		enum mvod_camfmt back;
-		assert_int_equal(mvod_lcam_camfmt(cc, &back), 0);
+		assert_int_equal(mvod_camfmt_of_fourcc(cc, MVOD_CAMFMT_LIBCAMERA, &back), 0);
 		assert_int_equal(back, map[i].f);
 	}
 	enum mvod_camfmt f;
-	assert_int_equal(mvod_lcam_camfmt(0x34325842 /* XB24 */, &f), -ENOENT);
+	assert_int_equal(mvod_camfmt_of_fourcc(0x34325842 /* XB24 */, MVOD_CAMFMT_LIBCAMERA, &f),
+			 -ENOENT);
 }
 
 /* This machine has no camera: either libcamera finds none, or mvod was built without it. */
