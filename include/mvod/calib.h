@@ -99,8 +99,8 @@ int mvod_calib_load_format(const char *path, struct mvod_camera *cam, enum mvod_
 int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *err, size_t errlen);
 
 /*
- * OpenCV FileStorage YAML/XML or ROS camera_info YAML (read through cv::FileStorage, which
- * needs OpenCV's "%YAML:1.0" header, so one is added when the text lacks it): K from
+ * OpenCV FileStorage YAML/XML or ROS camera_info YAML (read with libyaml and libxml2; XML
+ * with a DOCTYPE is refused, and only the first YAML document is read): K from
  * camera_matrix (or M1, the first camera of OpenCV's stereo_calib sample), coefficients from
  * distortion_coefficients (or D1). The model is pinhole-radtan unless distortion_model says
  * equidistant, fisheye or fisheye-kb4; OpenCV's own files cannot say, so 4 coefficients are
