@@ -12,6 +12,7 @@
 #include "calib/calib_internal.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
+#include "util/read_file.h"
 
 /* Calibration files are small; anything bigger is not one. */
 #define CALIB_MAX_BYTES (4 * 1024 * 1024)
@@ -40,36 +41,6 @@ bool mvod_camera_has_distortion(const struct mvod_camera *cam)
 		if (cam->dist[i] != 0.0)
 			return true;
 	return false;
-}
-
-int mvod_calib_read_text(const char *path, char **out, char *err, size_t errlen)
-{
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
-	char *buf = malloc(CALIB_MAX_BYTES + 1);
-	int ret = 0;
-	if (!buf) {
-		ret = -ENOMEM;
-		goto out;
-	}
-	size_t n = fread(buf, 1, CALIB_MAX_BYTES + 1, f);
-	if (ferror(f)) {
-		ret = mvod_errf(err, errlen, -EIO, "cannot read %s", path);
-		goto out;
-	}
-	if (n > CALIB_MAX_BYTES) {
-		ret = mvod_errf(err, errlen, -EFBIG, "%s is larger than %d MiB: not a calibration file", path,
-			   CALIB_MAX_BYTES >> 20);
-		goto out;
-	}
-	buf[n] = '\0';
-	*out = buf;
-	buf = NULL;
-out:
-	free(buf);
-	fclose(f);
-	return ret;
 }
 
 static bool valid_intrinsics(const struct mvod_camera *c)
@@ -320,7 +291,7 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 		     char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_calib_read_text(path, &text, err, errlen);
+	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", &text, NULL, err, errlen);
 	if (ret)
 		return ret;
 	const char *p = text + strspn(text, " \t\r\n");
