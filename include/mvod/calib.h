@@ -56,6 +56,9 @@ int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out);
 /* True when any distortion coefficient is non-zero. */
 bool mvod_camera_has_distortion(const struct mvod_camera *cam);
 
+/* The camera matrix [fx 0 cx; 0 fy cy; 0 0 1], row-major (skew is not modelled). */
+void mvod_camera_K(const struct mvod_camera *cam, double K[9]);
+
 /*
  * Loads a calibration file, choosing the reader by content: mvod JSON (mvod-calibration/1),
  * a JSON [K, dist] pair, KITTI calib.txt (P0), OpenCV FileStorage YAML/XML or ROS camera_info

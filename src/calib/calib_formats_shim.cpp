@@ -32,7 +32,8 @@ extern "C" int mvod_calib_save_opencv(const char *path, const struct mvod_camera
 			fs << "image_width" << cam->width;
 			fs << "image_height" << cam->height;
 		}
-		const double K[9] = {cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1};
+		double K[9];
+		mvod_camera_K(cam, K);
 		const double zero[5] = {0, 0, 0, 0, 0};
 		write_matrix(fs, "camera_matrix", 3, 3, K);
 		/* No coefficients is written as OpenCV's usual five zeros. */

@@ -81,6 +81,12 @@ static int json_K(const cJSON *K, struct mvod_camera *cam)
 	return mvod_calib_set_K(k, cam);
 }
 
+void mvod_camera_K(const struct mvod_camera *cam, double K[9])
+{
+	const double k[9] = {cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1};
+	memcpy(K, k, sizeof(k));
+}
+
 int mvod_calib_set_K(const double k[9], struct mvod_camera *cam)
 {
 	struct mvod_camera c = *cam;
@@ -379,10 +385,11 @@ static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_cal
 	cJSON_AddStringToObject(root, "model", mvod_cam_model_name(cam->model));
 	double size[2] = {cam->width, cam->height};
 	cJSON_AddItemToObject(root, "image_size", number_row(size, 2));
-	const double K[3][3] = {{cam->fx, 0, cam->cx}, {0, cam->fy, cam->cy}, {0, 0, 1}};
+	double K[9];
+	mvod_camera_K(cam, K);
 	cJSON *k = cJSON_CreateArray();
 	for (int r = 0; r < 3; r++)
-		cJSON_AddItemToArray(k, number_row(K[r], 3));
+		cJSON_AddItemToArray(k, number_row(K + 3 * r, 3));
 	cJSON_AddItemToObject(root, "K", k);
 	cJSON_AddItemToObject(root, "distortion", number_row(cam->dist, cam->n_dist));
 	if (cam->has_focus)
