@@ -56,6 +56,9 @@ int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out);
 /* True when any distortion coefficient is non-zero. */
 bool mvod_camera_has_distortion(const struct mvod_camera *cam);
 
+/* The camera matrix [fx 0 cx; 0 fy cy; 0 0 1], row-major (skew is not modelled). */
+void mvod_camera_K(const struct mvod_camera *cam, double K[9]);
+
 /*
  * Loads a calibration file, choosing the reader by content: mvod JSON (mvod-calibration/1),
  * a JSON [K, dist] pair, KITTI calib.txt (P0), OpenCV FileStorage YAML/XML or ROS camera_info
@@ -99,8 +102,8 @@ int mvod_calib_load_format(const char *path, struct mvod_camera *cam, enum mvod_
 int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *err, size_t errlen);
 
 /*
- * OpenCV FileStorage YAML/XML or ROS camera_info YAML (read through cv::FileStorage, which
- * needs OpenCV's "%YAML:1.0" header, so one is added when the text lacks it): K from
+ * OpenCV FileStorage YAML/XML or ROS camera_info YAML (read with libyaml and libxml2; XML
+ * with a DOCTYPE is refused, and only the first YAML document is read): K from
  * camera_matrix (or M1, the first camera of OpenCV's stereo_calib sample), coefficients from
  * distortion_coefficients (or D1). The model is pinhole-radtan unless distortion_model says
  * equidistant, fisheye or fisheye-kb4; OpenCV's own files cannot say, so 4 coefficients are

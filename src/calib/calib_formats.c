@@ -69,6 +69,17 @@ static void put_ros_matrix(FILE *f, const char *key, int rows, int cols, const d
 	fputs("]\n", f);
 }
 
+/* P = [K | 0]: a single camera's projection, as ROS and KITTI files hold it. */
+static void projection(const struct mvod_camera *cam, double P[12])
+{
+	double K[9];
+	mvod_camera_K(cam, K);
+	for (int r = 0; r < 3; r++) {
+		memcpy(P + 4 * r, K + 3 * r, 3 * sizeof(double));
+		P[4 * r + 3] = 0;
+	}
+}
+
 /* Text built in a memory stream (buf and len are valid once f is closed), then written whole. */
 static int write_stream(const char *path, char **buf, size_t *len, FILE *f, char *err, size_t errlen)
 {
@@ -117,9 +128,11 @@ int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *e
 		return mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
 	double dist[MVOD_MAX_DIST] = {0};
 	memcpy(dist, cam->dist, sizeof(double) * (size_t)cam->n_dist);
-	const double K[9] = {cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1};
+	double K[9];
+	mvod_camera_K(cam, K);
 	const double R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-	const double P[12] = {cam->fx, 0, cam->cx, 0, 0, cam->fy, cam->cy, 0, 0, 0, 1, 0};
+	double P[12];
+	projection(cam, P);
 	fprintf(f, "image_width: %d\nimage_height: %d\ncamera_name: camera\n", cam->width, cam->height);
 	put_ros_matrix(f, "camera_matrix", 3, 3, K);
 	fprintf(f, "distortion_model: %s\n", model);
@@ -141,7 +154,8 @@ int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char 
 	if (!f)
 		return mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
 	/* One camera: every P is the same [K | 0], for readers that expect all four lines. */
-	const double P[12] = {cam->fx, 0, cam->cx, 0, 0, cam->fy, cam->cy, 0, 0, 0, 1, 0};
+	double P[12];
+	projection(cam, P);
 	for (int i = 0; i < 4; i++) {
 		fprintf(f, "P%d: ", i);
 		put_numbers(f, P, 12, " ");

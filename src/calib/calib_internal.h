@@ -11,9 +11,6 @@
 extern "C" {
 #endif
 
-/* Reads a whole (small) calibration file into a NUL-terminated malloc'ed buffer. */
-int mvod_calib_read_text(const char *path, char **out, char *err, size_t errlen);
-
 /*
  * Takes fx, fy, cx, cy from a row-major K, which must be [fx 0 cx; 0 fy cy; 0 0 1] with finite
  * entries and fx, fy > 0 (skew is not modelled). Returns 0 or -EINVAL; cam is untouched then.

@@ -12,6 +12,7 @@
 #include "calib/calib_internal.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
+#include "util/read_file.h"
 
 /* Calibration files are small; anything bigger is not one. */
 #define CALIB_MAX_BYTES (4 * 1024 * 1024)
@@ -40,36 +41,6 @@ bool mvod_camera_has_distortion(const struct mvod_camera *cam)
 		if (cam->dist[i] != 0.0)
 			return true;
 	return false;
-}
-
-int mvod_calib_read_text(const char *path, char **out, char *err, size_t errlen)
-{
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
-	char *buf = malloc(CALIB_MAX_BYTES + 1);
-	int ret = 0;
-	if (!buf) {
-		ret = -ENOMEM;
-		goto out;
-	}
-	size_t n = fread(buf, 1, CALIB_MAX_BYTES + 1, f);
-	if (ferror(f)) {
-		ret = mvod_errf(err, errlen, -EIO, "cannot read %s", path);
-		goto out;
-	}
-	if (n > CALIB_MAX_BYTES) {
-		ret = mvod_errf(err, errlen, -EFBIG, "%s is larger than %d MiB: not a calibration file", path,
-			   CALIB_MAX_BYTES >> 20);
-		goto out;
-	}
-	buf[n] = '\0';
-	*out = buf;
-	buf = NULL;
-out:
-	free(buf);
-	fclose(f);
-	return ret;
 }
 
 static bool valid_intrinsics(const struct mvod_camera *c)
@@ -110,6 +81,12 @@ static int json_K(const cJSON *K, struct mvod_camera *cam)
 	return mvod_calib_set_K(k, cam);
 }
 
+void mvod_camera_K(const struct mvod_camera *cam, double K[9])
+{
+	const double k[9] = {cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1};
+	memcpy(K, k, sizeof(k));
+}
+
 int mvod_calib_set_K(const double k[9], struct mvod_camera *cam)
 {
 	struct mvod_camera c = *cam;
@@ -136,14 +113,19 @@ const char *mvod_calib_dist_counts(enum mvod_cam_model model)
 	return model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14";
 }
 
-int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+static cJSON *json_parse(const char *text, char *err, size_t errlen)
+{
+	cJSON *root = cJSON_Parse(text);
+	if (!root)
+		mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
+			  cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "?");
+	return root;
+}
+
+static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, size_t errlen)
 {
 	struct mvod_camera c = {0};
 	int ret = 0;
-	cJSON *root = cJSON_Parse(text);
-	if (!root)
-		return mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
-			    cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "?");
 	const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
 	if (!cJSON_IsString(fmt) || strcmp(fmt->valuestring, MVOD_CALIB_FORMAT) != 0) {
 		ret = mvod_errf(err, errlen, -EINVAL, "\"format\" must be \"%s\"", MVOD_CALIB_FORMAT);
@@ -190,8 +172,22 @@ int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, 
 	}
 	*cam = c;
 out:
+	return ret;
+}
+
+typedef int json_reader(const cJSON *root, struct mvod_camera *cam, char *err, size_t errlen);
+
+static int parse_with(json_reader *read, const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	cJSON *root = json_parse(text, err, errlen);
+	int ret = root ? read(root, cam, err, errlen) : -EINVAL;
 	cJSON_Delete(root);
 	return ret;
+}
+
+int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	return parse_with(json_camera, text, cam, err, errlen);
 }
 
 /* Coefficients as [k1, ...] or as numpy's 1xN [[k1, ...]]. */
@@ -214,13 +210,9 @@ static int json_pair_model(const cJSON *root, struct mvod_camera *c)
 	return cJSON_IsString(model) ? mvod_cam_model_parse(model->valuestring, &c->model) : -EINVAL;
 }
 
-int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+static int json_pair_camera(const cJSON *root, struct mvod_camera *cam, char *err, size_t errlen)
 {
 	struct mvod_camera c = {.model = MVOD_CAM_PINHOLE_RADTAN};
-	cJSON *root = cJSON_Parse(text);
-	if (!root)
-		return mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
-			    cJSON_GetErrorPtr() ? cJSON_GetErrorPtr() : "?");
 	int ret = 0;
 	bool array = cJSON_IsArray(root);
 	const char *kname = array ? "element 0 (K)" : "\"K\"";
@@ -242,6 +234,24 @@ int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *
 	} else {
 		*cam = c;
 	}
+	return ret;
+}
+
+int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	return parse_with(json_pair_camera, text, cam, err, errlen);
+}
+
+/* mvod JSON carries "format"; any other JSON is read as a [K, dist] pair. */
+static int json_any_camera(const char *text, struct mvod_camera *cam, enum mvod_calib_format *fmt,
+			   char *err, size_t errlen)
+{
+	cJSON *root = json_parse(text, err, errlen);
+	if (!root)
+		return -EINVAL;
+	bool mvod = cJSON_IsObject(root) && cJSON_GetObjectItemCaseSensitive(root, "format");
+	*fmt = mvod ? MVOD_CALIB_FMT_MVOD : MVOD_CALIB_FMT_PAIR;
+	int ret = (mvod ? json_camera : json_pair_camera)(root, cam, err, errlen);
 	cJSON_Delete(root);
 	return ret;
 }
@@ -272,69 +282,50 @@ static int parse_kitti(const char *text, struct mvod_camera *cam)
 	return -ENOENT;
 }
 
-int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+static int kitti_camera(const char *text, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	int ret = parse_kitti(text, cam);
+	if (ret == -ENOENT)
+		return mvod_errf(err, errlen, -EINVAL, "no \"P0:\" line (not a KITTI calib.txt)");
+	if (ret)
+		return mvod_errf(err, errlen, -EINVAL, "\"P0:\" needs 12 numbers with fx, fy > 0");
+	return 0;
+}
+
+/* Read once, parsed once by the reader the content asks for; a failure names the file. */
+static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam, enum mvod_calib_format *fmt,
+		     char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_calib_read_text(path, &text, err, errlen);
+	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", &text, NULL, err, errlen);
 	if (ret)
 		return ret;
-	ret = parse_kitti(text, cam);
-	if (ret == -ENOENT)
-		mvod_errf(err, errlen, -EINVAL, "%s: no \"P0:\" line (not a KITTI calib.txt)", path);
-	else if (ret)
-		mvod_errf(err, errlen, -EINVAL, "%s: \"P0:\" needs 12 numbers with fx, fy > 0", path);
-	free(text);
-	return ret ? -EINVAL : 0;
-}
-
-/* mvod JSON carries "format"; any other JSON is read as a [K, dist] pair. */
-static bool json_is_mvod(const char *text)
-{
-	cJSON *root = cJSON_Parse(text);
-	bool mvod = cJSON_IsObject(root) && cJSON_GetObjectItemCaseSensitive(root, "format");
-	cJSON_Delete(root);
-	return mvod;
-}
-
-/* OpenCV and ROS YAML look alike; mvod_calib_parse_filestorage tells them apart. */
-static enum mvod_calib_format sniff_format(const char *text)
-{
 	const char *p = text + strspn(text, " \t\r\n");
-	if (*p == '{' || *p == '[')
-		return json_is_mvod(p) ? MVOD_CALIB_FMT_MVOD : MVOD_CALIB_FMT_PAIR;
-	if (strstr(text, "P0:"))
-		return MVOD_CALIB_FMT_KITTI;
-	return MVOD_CALIB_FMT_OPENCV;
+	enum mvod_calib_format f = MVOD_CALIB_FMT_KITTI;
+	char why[256] = "";
+	if (kitti_only || (*p != '{' && *p != '[' && strstr(text, "P0:")))
+		ret = kitti_camera(text, cam, why, sizeof(why));
+	else if (*p == '{' || *p == '[')
+		ret = json_any_camera(p, cam, &f, why, sizeof(why));
+	else
+		ret = mvod_calib_parse_filestorage(text, cam, &f, why, sizeof(why));
+	free(text);
+	if (ret)
+		return mvod_errf(err, errlen, ret, "%s: %s", path, why);
+	if (fmt)
+		*fmt = f;
+	return 0;
+}
+
+int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	return load_text(path, true, cam, NULL, err, errlen);
 }
 
 int mvod_calib_load_format(const char *path, struct mvod_camera *cam, enum mvod_calib_format *fmt,
 			   char *err, size_t errlen)
 {
-	char *text = NULL;
-	int ret = mvod_calib_read_text(path, &text, err, errlen);
-	if (ret)
-		return ret;
-	enum mvod_calib_format f = sniff_format(text);
-	char why[256] = "";
-	switch (f) {
-	case MVOD_CALIB_FMT_MVOD:
-		ret = mvod_calib_parse_json(text, cam, why, sizeof(why));
-		break;
-	case MVOD_CALIB_FMT_PAIR:
-		ret = mvod_calib_parse_json_pair(text, cam, why, sizeof(why));
-		break;
-	case MVOD_CALIB_FMT_KITTI:
-		ret = mvod_calib_load_kitti(path, cam, err, errlen); /* names the file itself */
-		break;
-	default:
-		ret = mvod_calib_parse_filestorage(text, cam, &f, why, sizeof(why));
-	}
-	if (ret && f != MVOD_CALIB_FMT_KITTI)
-		mvod_errf(err, errlen, ret, "%s: %s", path, why);
-	if (!ret && fmt)
-		*fmt = f;
-	free(text);
-	return ret;
+	return load_text(path, false, cam, fmt, err, errlen);
 }
 
 int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
@@ -394,10 +385,11 @@ static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_cal
 	cJSON_AddStringToObject(root, "model", mvod_cam_model_name(cam->model));
 	double size[2] = {cam->width, cam->height};
 	cJSON_AddItemToObject(root, "image_size", number_row(size, 2));
-	const double K[3][3] = {{cam->fx, 0, cam->cx}, {0, cam->fy, cam->cy}, {0, 0, 1}};
+	double K[9];
+	mvod_camera_K(cam, K);
 	cJSON *k = cJSON_CreateArray();
 	for (int r = 0; r < 3; r++)
-		cJSON_AddItemToArray(k, number_row(K[r], 3));
+		cJSON_AddItemToArray(k, number_row(K + 3 * r, 3));
 	cJSON_AddItemToObject(root, "K", k);
 	cJSON_AddItemToObject(root, "distortion", number_row(cam->dist, cam->n_dist));
 	if (cam->has_focus)

@@ -1,17 +1,15 @@
 #include "mvod/config.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <ini.h>
 
 #include "util/errbuf.h"
+#include "util/read_file.h"
 
 /* Enum fields are written through an int. */
 _Static_assert(sizeof(enum mvod_scale_mode) == sizeof(int), "enum size");
@@ -338,43 +336,12 @@ int mvod_config_parse_buffer(const char *name, const char *text, size_t len,
 	return -EINVAL;
 }
 
-/* The whole file, NUL-terminated, at most max bytes. */
-static int slurp(const char *path, size_t max, char **buf, size_t *len, char *err, size_t errlen)
-{
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
-	if (fd < 0)
-		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
-	int ret = 0;
-	char *b = malloc(max + 1);
-	size_t n = 0;
-	ssize_t r = 0;
-	if (!b)
-		ret = mvod_errf(err, errlen, -ENOMEM, "%s: out of memory", path);
-	while (!ret && n <= max && (r = read(fd, b + n, max + 1 - n)) != 0) {
-		if (r < 0 && errno != EINTR)
-			ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path,
-					strerror(errno));
-		n += r > 0 ? (size_t)r : 0;
-	}
-	close(fd);
-	if (!ret && n > max)
-		ret = mvod_errf(err, errlen, -EFBIG, "%s: larger than %zu bytes: not a config file",
-				path, max);
-	if (ret) {
-		free(b);
-		return ret;
-	}
-	*buf = b;
-	*len = n;
-	return 0;
-}
-
 int mvod_config_load(const char *path, struct mvod_config *out, char *err, size_t errlen)
 {
 	char *text = NULL;
 	size_t len = 0;
 	mvod_config_default(out);
-	int ret = slurp(path, 1 << 20, &text, &len, err, errlen);
+	int ret = mvod_read_file(path, 1 << 20, "config file", &text, &len, err, errlen);
 	if (ret)
 		return ret;
 	ret = mvod_config_parse_buffer(path, text, len, out, err, errlen);

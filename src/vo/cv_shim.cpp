@@ -33,9 +33,16 @@ struct mvod_cv_preproc {
 	cv::Mat grey, scaled, blurred;
 };
 
+static cv::Matx33d K_of(const struct mvod_camera *cam)
+{
+	cv::Matx33d K;
+	mvod_camera_K(cam, K.val);
+	return K;
+}
+
 static void build_maps(mvod_cv_preproc *p, const struct mvod_camera *cam, const cv::Matx33d &Knew)
 {
-	cv::Matx33d K(cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1);
+	const cv::Matx33d K = K_of(cam);
 	cv::Mat D(1, cam->n_dist, CV_64F, const_cast<double *>(cam->dist));
 	cv::Size size(p->out_w, p->out_h);
 	if (cam->model == MVOD_CAM_FISHEYE_KB4)
@@ -71,7 +78,7 @@ extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resi
 		c.model = MVOD_CAM_PINHOLE_RADTAN;
 		p->remap = mvod_camera_has_distortion(cam);
 		if (p->remap)
-			build_maps(p, cam, cv::Matx33d(c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1));
+			build_maps(p, cam, K_of(&c));
 		p->grey.create(p->in_h, p->in_w, CV_8UC1);
 		p->scaled.create(p->out_h, p->out_w, CV_8UC1);
 		p->blurred.create(p->out_h, p->out_w, CV_8UC1);

@@ -1,0 +1,365 @@
+/*
+ * OpenCV FileStorage YAML/XML and ROS camera_info YAML, read with libyaml and libxml2. A
+ * calibration file is user input, and OpenCV's own FileStorage parser over-reads and loops
+ * forever on malformed text (opencv#28619, opencv#21851); these two parsers are fuzzed
+ * upstream and bound their own work. Only the keys a camera needs are looked at, each as a
+ * node of whichever syntax the text was.
+ */
+#include "mvod/calib.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include <libxml/parser.h>
+#include <libxml/tree.h>
+#include <yaml.h>
+
+#include "calib/calib_internal.h"
+#include "util/errbuf.h"
+
+#define UNKNOWN_FORMAT                                                                            \
+	"unknown calibration format: not mvod JSON, a [K, dist] JSON pair, KITTI calib.txt, "      \
+	"OpenCV YAML/XML or ROS camera_info YAML"
+
+/* A YAML node (with its document, which resolves its children) or an XML element; none when absent. */
+struct fs_node {
+	yaml_document_t *doc;
+	yaml_node_t *y;
+	xmlNode *x;
+};
+
+/* The entries of a matrix's data: all counted, the first MVOD_MAX_DIST kept. */
+struct fs_numbers {
+	size_t count;
+	size_t bad; /* index of the first entry that is no finite number, or SIZE_MAX */
+	bool bad_is_number; /* that entry is a number, just not a finite one */
+	double v[MVOD_MAX_DIST];
+};
+
+static bool present(struct fs_node n)
+{
+	return n.y || n.x;
+}
+
+/* An XML element is a map when it holds elements; its text is a scalar otherwise. */
+static bool is_map(struct fs_node n)
+{
+	if (n.y)
+		return n.y->type == YAML_MAPPING_NODE;
+	for (xmlNode *c = n.x ? n.x->children : NULL; c; c = c->next)
+		if (c->type == XML_ELEMENT_NODE)
+			return true;
+	return false;
+}
+
+static bool yaml_scalar_is(const yaml_node_t *n, const char *s)
+{
+	return n && n->type == YAML_SCALAR_NODE && n->data.scalar.length == strlen(s) &&
+	       memcmp(n->data.scalar.value, s, n->data.scalar.length) == 0;
+}
+
+/* A map's value under key (the first, if the key repeats). */
+static struct fs_node child(struct fs_node map, const char *key)
+{
+	struct fs_node out = {.doc = map.doc};
+	if (map.y && map.y->type == YAML_MAPPING_NODE) {
+		for (yaml_node_pair_t *p = map.y->data.mapping.pairs.start; p < map.y->data.mapping.pairs.top;
+		     p++) {
+			if (yaml_scalar_is(yaml_document_get_node(map.doc, p->key), key)) {
+				out.y = yaml_document_get_node(map.doc, p->value);
+				break;
+			}
+		}
+	}
+	for (xmlNode *c = map.x ? map.x->children : NULL; c && !out.x; c = c->next)
+		if (c->type == XML_ELEMENT_NODE && xmlStrEqual(c->name, BAD_CAST key))
+			out.x = c;
+	return out;
+}
+
+/*
+ * A scalar's text, malloc'ed; NULL when the node is absent or not a scalar. *plain: whether
+ * it may be a number (YAML's quoted strings are not; XML has no quoting).
+ */
+static char *scalar(struct fs_node n, bool *plain)
+{
+	if (n.y) {
+		const yaml_node_t *y = n.y;
+		if (y->type != YAML_SCALAR_NODE || memchr(y->data.scalar.value, 0, y->data.scalar.length))
+			return NULL;
+		*plain = y->data.scalar.style == YAML_PLAIN_SCALAR_STYLE;
+		return strndup((const char *)y->data.scalar.value, y->data.scalar.length);
+	}
+	if (!n.x || is_map(n))
+		return NULL;
+	xmlChar *t = xmlNodeGetContent(n.x);
+	char *s = t ? strdup((const char *)t) : NULL;
+	xmlFree(t);
+	*plain = true;
+	return s;
+}
+
+/* The text with the whitespace around it, as XML may have, ignored. */
+static bool all_space(const char *s)
+{
+	return s[strspn(s, " \t\r\n")] == '\0';
+}
+
+static bool read_int(struct fs_node n, long lo, long hi, int *out)
+{
+	bool plain = false;
+	char *s = scalar(n, &plain), *end = s;
+	long v = s && plain ? strtol(s, &end, 10) : 0;
+	bool ok = s && end != s && all_space(end) && v >= lo && v <= hi;
+	free(s);
+	if (ok)
+		*out = (int)v;
+	return ok;
+}
+
+/* YAML's spellings of infinity and NaN, which strtod does not know. */
+static bool yaml_nonfinite(const char *s)
+{
+	s += *s == '-' || *s == '+';
+	return strcasecmp(s, ".inf") == 0 || strcasecmp(s, ".nan") == 0;
+}
+
+/* One entry of len bytes at s (NUL-terminated there), or NULL for one that is no scalar. */
+static void take_number(struct fs_numbers *m, const char *s, size_t len)
+{
+	char *end = (char *)s;
+	double v = s ? strtod(s, &end) : 0;
+	bool number = end != s && end == s + len;
+	if ((!number || !isfinite(v)) && m->bad == SIZE_MAX) {
+		m->bad = m->count;
+		m->bad_is_number = number || (s && yaml_nonfinite(s));
+	}
+	if (m->count < MVOD_MAX_DIST)
+		m->v[m->count] = v;
+	m->count++;
+}
+
+/* data: a YAML sequence of plain scalars, or XML text of numbers between whitespace. */
+static int read_numbers(struct fs_node data, struct fs_numbers *m)
+{
+	*m = (struct fs_numbers){.bad = SIZE_MAX};
+	if (data.y) {
+		if (data.y->type != YAML_SEQUENCE_NODE)
+			return -EINVAL;
+		for (yaml_node_item_t *i = data.y->data.sequence.items.start; i < data.y->data.sequence.items.top;
+		     i++) {
+			const yaml_node_t *v = yaml_document_get_node(data.doc, *i);
+			bool plain = v && v->type == YAML_SCALAR_NODE && v->data.scalar.style == YAML_PLAIN_SCALAR_STYLE;
+			take_number(m, plain ? (const char *)v->data.scalar.value : NULL,
+				    plain ? v->data.scalar.length : 0);
+		}
+		return 0;
+	}
+	bool plain;
+	char *text = scalar(data, &plain), *save = NULL;
+	if (!text)
+		return -EINVAL;
+	for (char *t = strtok_r(text, " \t\r\n", &save); t; t = strtok_r(NULL, " \t\r\n", &save))
+		take_number(m, t, strlen(t));
+	free(text);
+	return 0;
+}
+
+/*
+ * A matrix: rows, cols and rows*cols finite numbers in data. OpenCV's !!opencv-matrix, its XML
+ * twin and ROS's plain maps all have this shape. Nothing is sized from rows and cols, so a
+ * file that claims a billion entries costs no more than its text.
+ */
+static int read_matrix(struct fs_node root, const char *key, int *rows, int *cols, struct fs_numbers *m,
+		       char *err, size_t errlen)
+{
+	struct fs_node node = child(root, key);
+	if (!present(node))
+		return mvod_errf(err, errlen, -EINVAL, "no \"%s\" key", key);
+	if (!is_map(node) || !read_int(child(node, "rows"), INT_MIN, INT_MAX, rows) ||
+	    !read_int(child(node, "cols"), INT_MIN, INT_MAX, cols) || read_numbers(child(node, "data"), m))
+		return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be a matrix with rows, cols and data",
+				 key);
+	if (*rows < 0 || *cols < 0 || (uint64_t)*rows * (uint64_t)*cols != m->count)
+		return mvod_errf(err, errlen, -EINVAL, "\"%s\": data holds %zu numbers, not rows x cols = %d x %d",
+				 key, m->count, *rows, *cols);
+	if (m->bad != SIZE_MAX)
+		return mvod_errf(err, errlen, -EINVAL, "\"%s\": entry %zu is not %s", key, m->bad,
+				 m->bad_is_number ? "finite" : "a number");
+	return 0;
+}
+
+static int read_size(struct fs_node root, const char *key, int *out, char *err, size_t errlen)
+{
+	struct fs_node n = child(root, key);
+	if (present(n) && !read_int(n, 0, 65535, out))
+		return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be a whole number of pixels", key);
+	return 0;
+}
+
+/* ROS names, Kalibr's and mvod's own. */
+static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err, size_t errlen)
+{
+	struct fs_node n = child(root, "distortion_model");
+	if (!present(n))
+		return 0;
+	static const struct {
+		const char *name;
+		enum mvod_cam_model model;
+	} names[] = {
+		{"plumb_bob", MVOD_CAM_PINHOLE_RADTAN},  {"rational_polynomial", MVOD_CAM_PINHOLE_RADTAN},
+		{"radtan", MVOD_CAM_PINHOLE_RADTAN},     {"pinhole-radtan", MVOD_CAM_PINHOLE_RADTAN},
+		{"equidistant", MVOD_CAM_FISHEYE_KB4},   {"fisheye", MVOD_CAM_FISHEYE_KB4},
+		{"fisheye-kb4", MVOD_CAM_FISHEYE_KB4},
+	};
+	bool plain;
+	char *name = scalar(n, &plain);
+	size_t i = 0;
+	while (name && i < sizeof(names) / sizeof(names[0]) && strcmp(name, names[i].name) != 0)
+		i++;
+	bool known = name && i < sizeof(names) / sizeof(names[0]);
+	free(name);
+	if (!known)
+		return mvod_errf(err, errlen, -EINVAL,
+				 "\"distortion_model\" must be plumb_bob, rational_polynomial, equidistant or fisheye");
+	*model = names[i].model;
+	return 0;
+}
+
+static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, size_t errlen)
+{
+	/* OpenCV's stereo_calib sample writes M1 D1 M2 D2: the first camera is the one wanted. */
+	const bool stereo = !present(child(root, "camera_matrix")) && present(child(root, "M1"));
+	const char *kkey = stereo ? "M1" : "camera_matrix", *dkey = stereo ? "D1" : "distortion_coefficients";
+	int rows, cols, ret;
+	struct fs_numbers m;
+	if ((ret = read_size(root, "image_width", &c->width, err, errlen)) ||
+	    (ret = read_size(root, "image_height", &c->height, err, errlen)) ||
+	    (ret = read_model(root, &c->model, err, errlen)))
+		return ret;
+	if (!present(child(root, kkey)))
+		return mvod_errf(err, errlen, -EINVAL,
+				 "unknown calibration format: no \"camera_matrix\" key, so not OpenCV or ROS "
+				 "YAML (mvod also reads mvod JSON, [K, dist] JSON and KITTI calib.txt)");
+	if ((ret = read_matrix(root, kkey, &rows, &cols, &m, err, errlen)))
+		return ret;
+	if (rows != 3 || cols != 3 || mvod_calib_set_K(m.v, c) != 0)
+		return mvod_errf(err, errlen, -EINVAL,
+				 "\"%s\" must be 3x3 [fx 0 cx; 0 fy cy; 0 0 1] with fx, fy > 0", kkey);
+	if ((ret = read_matrix(root, dkey, &rows, &cols, &m, err, errlen)))
+		return ret;
+	if ((rows > 1 && cols > 1) || m.count > MVOD_MAX_DIST ||
+	    !mvod_calib_dist_count_ok(c->model, (int)m.count))
+		return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be 1xN or Nx1 with N = %s for %s (not %dx%d)",
+				 dkey, mvod_calib_dist_counts(c->model), mvod_cam_model_name(c->model), rows, cols);
+	c->n_dist = (int)m.count;
+	memcpy(c->dist, m.v, sizeof(double) * m.count);
+	return 0;
+}
+
+static int yaml_error(const yaml_parser_t *p, char *err, size_t errlen)
+{
+	if (p->error == YAML_MEMORY_ERROR)
+		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading the YAML");
+	/* The reader (bad UTF-8, say) marks no line, only the byte. */
+	if (p->error == YAML_READER_ERROR)
+		return mvod_errf(err, errlen, -EINVAL, UNKNOWN_FORMAT " (YAML error at byte %zu: %s)",
+				 p->problem_offset, p->problem ? p->problem : "?");
+	return mvod_errf(err, errlen, -EINVAL, UNKNOWN_FORMAT " (YAML error at line %zu: %s)",
+			 p->problem_mark.line + 1, p->problem ? p->problem : "?");
+}
+
+/*
+ * The first document of the text into doc. Later documents are parsed, so that a syntax error
+ * anywhere is one (as it is for OpenCV), but not read (nor are they by OpenCV).
+ */
+static int load_yaml(const char *text, yaml_document_t *doc, char *err, size_t errlen)
+{
+	char *copy = strdup(text);
+	yaml_parser_t parser;
+	if (!copy || !yaml_parser_initialize(&parser)) {
+		free(copy);
+		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading the YAML");
+	}
+	/* OpenCV's "%YAML:1.0" is no YAML directive: as a comment, line numbers stay right. */
+	char *head = copy + strspn(copy, " \t\r\n");
+	if (strncmp(head, "%YAML:", 6) == 0)
+		*head = '#';
+	yaml_parser_set_input_string(&parser, (const unsigned char *)copy, strlen(copy));
+	int ret = yaml_parser_load(&parser, doc) ? 0 : yaml_error(&parser, err, errlen);
+	for (bool more = ret == 0 && yaml_document_get_root_node(doc); more && ret == 0;) {
+		yaml_document_t next;
+		if (!yaml_parser_load(&parser, &next)) {
+			ret = yaml_error(&parser, err, errlen);
+			yaml_document_delete(doc);
+			break;
+		}
+		more = yaml_document_get_root_node(&next) != NULL;
+		yaml_document_delete(&next);
+	}
+	yaml_parser_delete(&parser);
+	free(copy);
+	return ret;
+}
+
+/*
+ * Without a DOCTYPE there are no entities to expand and no DTD to fetch; OpenCV never writes
+ * one. XML_PARSE_NONET besides, and no XML_PARSE_NOENT or XML_PARSE_DTDLOAD.
+ */
+static int load_xml(const char *text, xmlDoc **doc, char *err, size_t errlen)
+{
+	size_t len = strlen(text);
+	if (strstr(text, "<!DOCTYPE"))
+		return mvod_errf(err, errlen, -EINVAL, "XML with a DOCTYPE is not OpenCV's: refused");
+	if (len > INT_MAX)
+		return mvod_errf(err, errlen, -EFBIG, "XML text too large");
+	xmlResetLastError();
+	*doc = xmlReadMemory(text, (int)len, NULL, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+	if (!*doc) {
+		const xmlError *e = xmlGetLastError();
+		const char *msg = e && e->message ? e->message : "?";
+		return mvod_errf(err, errlen, -EINVAL, UNKNOWN_FORMAT " (XML error at line %d: %.*s)",
+				 e ? e->line : 0, (int)strcspn(msg, "\n"), msg);
+	}
+	const xmlNode *root = xmlDocGetRootElement(*doc);
+	if (!root || !xmlStrEqual(root->name, BAD_CAST "opencv_storage")) {
+		xmlFreeDoc(*doc);
+		return mvod_errf(err, errlen, -EINVAL, UNKNOWN_FORMAT " (XML whose root is not <opencv_storage>)");
+	}
+	return 0;
+}
+
+int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam, enum mvod_calib_format *fmt,
+				 char *err, size_t errlen)
+{
+	const char *p = text + strspn(text, " \t\r\n");
+	const bool xml = *p == '<';
+	yaml_document_t ydoc;
+	xmlDoc *xdoc = NULL;
+	int ret = xml ? load_xml(p, &xdoc, err, errlen) : load_yaml(text, &ydoc, err, errlen);
+	if (ret)
+		return ret;
+	struct fs_node root = {.doc = xml ? NULL : &ydoc};
+	if (xml)
+		root.x = xmlDocGetRootElement(xdoc);
+	else
+		root.y = yaml_document_get_root_node(&ydoc);
+	struct mvod_camera c = {.model = MVOD_CAM_PINHOLE_RADTAN};
+	ret = read_camera(root, &c, err, errlen);
+	if (xml)
+		xmlFreeDoc(xdoc);
+	else
+		yaml_document_delete(&ydoc);
+	if (ret)
+		return ret;
+	*cam = c;
+	if (fmt)
+		*fmt = xml || strncmp(p, "%YAML:", 6) == 0 ? MVOD_CALIB_FMT_OPENCV : MVOD_CALIB_FMT_ROS;
+	return 0;
+}

@@ -1,0 +1,62 @@
+#include "util/read_file.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "util/errbuf.h"
+
+/* The buffer doubles from a page up to max + 1 bytes, the first byte too many. */
+static int grow(char **buf, size_t *cap, size_t max)
+{
+	size_t want = *cap ? 2 * *cap : 4096;
+	size_t next = want > max + 1 ? max + 1 : want;
+	char *b = realloc(*buf, next + 1);
+	if (!b)
+		return -ENOMEM;
+	*buf = b;
+	*cap = next;
+	return 0;
+}
+
+int mvod_read_file(const char *path, size_t max, const char *what, char **out, size_t *len, char *err,
+		   size_t errlen)
+{
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
+		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+	char *buf = NULL;
+	size_t n = 0, cap = 0;
+	int ret = 0;
+	for (;;) {
+		if (n == cap && n > max) {
+			ret = mvod_errf(err, errlen, -EFBIG, "%s is larger than %zu bytes: not a %s", path, max,
+					what);
+			break;
+		}
+		if (n == cap && (ret = grow(&buf, &cap, max)) != 0) {
+			mvod_errf(err, errlen, ret, "cannot read %s: out of memory", path);
+			break;
+		}
+		ssize_t r = read(fd, buf + n, cap - n);
+		if (r == 0)
+			break;
+		if (r < 0 && errno != EINTR) {
+			ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+			break;
+		}
+		n += r > 0 ? (size_t)r : 0;
+	}
+	close(fd);
+	if (ret) {
+		free(buf);
+		return ret;
+	}
+	buf[n] = '\0';
+	*out = buf;
+	if (len)
+		*len = n;
+	return 0;
+}
