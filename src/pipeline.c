@@ -6,13 +6,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "mvod/capture.h"
 #include "mvod/eval.h"
 #include "mvod/log.h"
 #include "mvod/plot.h"
+#include "util/clock.h"
 #include "util/notify.h"
 #include "mvod_status_t.h"
 
@@ -62,13 +62,6 @@ struct run {
 	int32_t faults;                    /* mvod.status_t FAULT_ bits seen so far */
 	int plot_aligned; /* the plotted estimate was Sim(3)-aligned to the ground truth */
 };
-
-static double now_s(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + ts.tv_nsec / 1e9;
-}
 
 /* Resident set size in KiB; read with read(2) into the stack, since stdio would malloc. */
 static int64_t rss_kb(void)
@@ -209,7 +202,7 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 			   const struct mvod_vo_result *res)
 {
 	struct mvod_run_summary *s = r->sum;
-	double now = now_s();
+	double now = mvod_now_s();
 	double n = s->frames ? (double)s->frames : 1;
 	struct mvod_status st = {
 		.utime = f->utime,
@@ -269,7 +262,7 @@ static double record_times(struct run *r, const struct mvod_vo_result *res)
 
 static bool status_periodic_due(const struct run *r)
 {
-	return now_s() - r->last_status >= 1.0 / r->o->status_hz;
+	return mvod_now_s() - r->last_status >= 1.0 / r->o->status_hz;
 }
 
 static int record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
@@ -421,7 +414,7 @@ static int loop(struct run *r, volatile sig_atomic_t *stop)
 	while (!stopped(r, stop)) {
 		between_frames(r);
 		struct mvod_frame f;
-		double t0 = now_s();
+		double t0 = mvod_now_s();
 		int ret = mvod_source_read(r->src, &f);
 		if (ret == -ENODATA)
 			return 0;
@@ -433,7 +426,7 @@ static int loop(struct run *r, volatile sig_atomic_t *stop)
 		}
 		if (ret)
 			return read_failed(r, ret);
-		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
+		ret = process_frame(r, &f, (mvod_now_s() - t0) * 1e3);
 		if (ret)
 			return ret;
 	}
@@ -488,7 +481,7 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 		between_frames(r);
 		struct mvod_frame f;
 		int epoch;
-		double t0 = now_s();
+		double t0 = mvod_now_s();
 		ret = mvod_capture_next(r->cap, LIVE_WAIT_MS, &f, &epoch);
 		if (ret == -EAGAIN) {
 			report_down(r);
@@ -505,7 +498,7 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 			fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 		r->sum->dropped += f.index - r->last_index - 1;
 		r->last_index = f.index;
-		ret = process_frame(r, &f, (now_s() - t0) * 1e3);
+		ret = process_frame(r, &f, (mvod_now_s() - t0) * 1e3);
 		if (ret)
 			return ret;
 	}
@@ -536,7 +529,7 @@ static void align_for_plot(struct run *r, const double R[9], const double t[3], 
 static void summarise(struct run *r)
 {
 	struct mvod_run_summary *s = r->sum;
-	s->wall_s = now_s() - r->t_start;
+	s->wall_s = mvod_now_s() - r->t_start;
 	s->fps = s->wall_s > 0 ? s->frames / s->wall_s : 0;
 	s->held = s->frames - s->tracked;
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
@@ -583,7 +576,7 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 	if (!ret)
 		ret = open_outputs(&r);
 	if (!ret) {
-		r.t_start = now_s();
+		r.t_start = mvod_now_s();
 		ret = r.info.live ? live_loop(&r, stop) : loop(&r, stop);
 		mvod_capture_stop(r.cap);
 		report_stop(&r);

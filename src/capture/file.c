@@ -10,11 +10,11 @@
 #include <stdbool.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "capture/uri.h"
 #include "capture/video_shim.h"
+#include "util/clock.h"
 
 /*
  * Containers without a frame index (Matroska, AVI) have their frame count estimated from the
@@ -40,13 +40,6 @@ struct file_source {
 	int64_t wall0_us;      /* monotonic time the first frame was handed out */
 	int64_t media0_us;     /* its media time */
 };
-
-static int64_t now_us(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
-}
 
 static int take_param(void *ctx, const char *key, const char *value, char *err, size_t errlen)
 {
@@ -132,11 +125,11 @@ static int paced_read(struct file_source *fs, struct mvod_frame *frame)
 			return ret;
 		fs->pending = true;
 		if (fs->held.index == 0) {
-			fs->wall0_us = now_us();
+			fs->wall0_us = mvod_now_us();
 			fs->media0_us = fs->held.utime;
 		}
 	}
-	int64_t wait = fs->wall0_us + (fs->held.utime - fs->media0_us) - now_us();
+	int64_t wait = fs->wall0_us + (fs->held.utime - fs->media0_us) - mvod_now_us();
 	if (wait > PACE_SLICE_US) {
 		usleep(PACE_SLICE_US);
 		return -EAGAIN;

@@ -14,13 +14,13 @@
 #include <string.h>
 #include <sys/ioctl.h>
 #include <sys/mman.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <linux/videodev2.h>
 
 #include "capture/backends.h"
 #include "capture/uri.h"
+#include "util/clock.h"
 
 /* Enough to keep the driver filling one buffer while mvod converts another. */
 #define WANT_BUFFERS 4
@@ -398,9 +398,7 @@ static int64_t buffer_utime(const struct v4l2_buffer *b)
 {
 	if ((b->flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC)
 		return (int64_t)b->timestamp.tv_sec * 1000000 + b->timestamp.tv_usec;
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+	return mvod_now_us();
 }
 
 static int take_frame(struct v4l2_source *v, const struct v4l2_buffer *b,

@@ -4,11 +4,11 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "cv_shim.h"
 #include "match.h"
 #include "motion.h"
+#include "util/clock.h"
 
 const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",
 							 "pose"};
@@ -98,13 +98,6 @@ struct mvod_vo {
 	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
 };
-
-static double now_ms(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
-}
 
 static int keyframe_init(struct keyframe *k, int cap, int desc_bytes)
 {
@@ -412,16 +405,16 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT && !gt_position)
 		return -EINVAL;
 	memset(res, 0, sizeof(*res));
-	double t0 = now_ms();
+	double t0 = 1e3 * mvod_now_s();
 	struct mvod_image grey;
 	int ret = mvod_cv_preproc_run(vo->pre, img, &grey);
 	if (ret)
 		return ret;
-	double t1 = now_ms();
+	double t1 = 1e3 * mvod_now_s();
 	ret = mvod_cv_detect(vo->det, &grey, &vo->cur->f);
 	if (ret)
 		return ret;
-	double t2 = now_ms();
+	double t2 = 1e3 * mvod_now_s();
 	res->features = vo->cur->f.n;
 	if (!vo->have_ref) {
 		res->status = vo->cur->f.n >= vo->p.min_matches ? MVOD_FRAME_FIRST
@@ -435,11 +428,11 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
 			return ret;
 		res->status = MVOD_FRAME_FEW_MATCHES;
 	}
-	double t3 = now_ms();
+	double t3 = 1e3 * mvod_now_s();
 	if (res->status == MVOD_FRAME_FEW_MATCHES && res->matches >= vo->p.min_matches)
 		res->status = estimate(vo, gt_position, res);
 	settle(vo, gt_position, res);
-	double t4 = now_ms();
+	double t4 = 1e3 * mvod_now_s();
 	res->pose = vo->pose;
 	res->state = vo->state;
 	res->ms[MVOD_STAGE_PREPROCESS] = t1 - t0;
