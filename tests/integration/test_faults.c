@@ -153,6 +153,40 @@ static void test_trajectory_disk_full(void **state)
 }
 
 /*
+ * The trajectory on a pipe whose reader is gone before the first line: every write fails with
+ * EPIPE. mvod must not die of SIGPIPE: the same one logged error as a full disk, poses over LCM
+ * to the end, and exit 1.
+ */
+static void test_trajectory_reader_gone(void **state)
+{
+	(void)state;
+	char err_path[300], err[4096];
+	snprintf(err_path, sizeof(err_path), "%s/epipe.err", harness_tmpdir());
+	unlink(lcmlog);
+	int fds[2];
+	assert_int_equal(pipe(fds), 0);
+	close(fds[0]);
+	pid_t pid = fork();
+	assert_true(pid >= 0);
+	if (pid == 0) {
+		dup2(fds[1], STDOUT_FILENO);
+		if (!freopen(err_path, "w", stderr))
+			_exit(127);
+		execl(harness_bin("MVOD"), "mvod", "-q", "--source", video, "--calib", calib,
+		      "--trajectory", "/dev/stdout", "--lcm-url", url, (char *)NULL);
+		_exit(127);
+	}
+	close(fds[1]);
+	int status;
+	if (!harness_wait(pid, &status))
+		fail_msg("mvod killed by signal %d", status);
+	harness_read_file(err_path, err, sizeof(err));
+	if (status != 1 || count(err, "Broken pipe") != 1 || count(err, "\n") != 1)
+		fail_msg("expected exit 1 and one 'Broken pipe' line, got %d: %s", status, err);
+	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
+}
+
+/*
  * An LCM URL that names no provider, or one whose provider cannot open (a log in a directory
  * that does not exist): exit 1 naming it, before any output. Tests use memq:// and file://
  * only, so the second stands for every provider that fails to start.
@@ -201,6 +235,7 @@ int main(void)
 		cmocka_unit_test(test_truncated_video),
 		cmocka_unit_test(test_truncated_video_live),
 		cmocka_unit_test(test_trajectory_disk_full),
+		cmocka_unit_test(test_trajectory_reader_gone),
 		cmocka_unit_test(test_invalid_lcm_url),
 		cmocka_unit_test(test_sigterm_leaves_whole_outputs),
 		cmocka_unit_test(test_unreadable_frames_skipped),
