@@ -24,8 +24,6 @@ namespace {
  * usable for calibration. Corners are then refined in the full image.
  */
 const int DETECT_MAX_SIDE = 1280;
-/* Dictionaries in groups of four share their markers (DICT_6X6_50 is DICT_6X6_250's first 50). */
-const int DICT_FAMILY_SIZE = 4, N_SIZED_DICTS = 16, N_DICTS = 21;
 
 /*
  * Each Levenberg-Marquardt step of OpenCV's calibration costs a dense solve cubic in 6 x views
@@ -33,19 +31,6 @@ const int DICT_FAMILY_SIZE = 4, N_SIZED_DICTS = 16, N_DICTS = 21;
  * below DBL_EPSILON. A relative update of 1e-8 moves fx by under 1e-5 px.
  */
 const cv::TermCriteria SOLVER_STOP(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 1e-8);
-
-const char *const dict_names[N_DICTS] = {
-	"DICT_4X4_50", "DICT_4X4_100", "DICT_4X4_250", "DICT_4X4_1000", "DICT_5X5_50",
-	"DICT_5X5_100", "DICT_5X5_250", "DICT_5X5_1000", "DICT_6X6_50", "DICT_6X6_100",
-	"DICT_6X6_250", "DICT_6X6_1000", "DICT_7X7_50", "DICT_7X7_100", "DICT_7X7_250",
-	"DICT_7X7_1000", "DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5", "DICT_APRILTAG_25h9",
-	"DICT_APRILTAG_36h10", "DICT_APRILTAG_36h11",
-};
-
-int dict_family(int d)
-{
-	return d < N_SIZED_DICTS ? d / DICT_FAMILY_SIZE : d;
-}
 
 cv::Mat grey_of(const mvod_image &img)
 {
@@ -282,16 +267,19 @@ bool find_any_chessboard(const cv::Mat &grey, char *what, size_t len)
 bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, char *what, size_t len)
 {
 	auto params = cv::aruco::DetectorParameters::create();
-	for (int k = 0; k < N_DICTS; k++) {
-		if (d.board.kind == MVOD_BOARD_CHARUCO && dict_family(k) == dict_family(d.board.dict))
+	for (int k = 0; k < mvod_board_dict_count(); k++) {
+		if (d.board.kind == MVOD_BOARD_CHARUCO &&
+		    mvod_board_dict_family(k) == mvod_board_dict_family(d.board.dict))
 			continue;
 		std::vector<std::vector<cv::Point2f>> corners;
 		std::vector<int> ids;
 		cv::aruco::detectMarkers(grey, cv::aruco::getPredefinedDictionary(k), corners, ids, params);
 		/* One or two hits can be chance codes in texture; a board shows many. */
 		if (ids.size() >= 4) {
-			std::snprintf(what, len, "%zu markers of %s%s", ids.size(), dict_names[k],
-				      k < N_SIZED_DICTS ? " (or a larger dictionary of its family)" : "");
+			std::snprintf(what, len, "%zu markers of %s%s", ids.size(), mvod_board_dict_name(k),
+				      mvod_board_dict_family_size(k) > 1
+					      ? " (or a larger dictionary of its family)"
+					      : "");
 			return true;
 		}
 	}

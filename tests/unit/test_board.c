@@ -3,6 +3,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <cmocka.h>
@@ -23,6 +24,35 @@ static void charuco_spec_round_trips(void **state)
 	assert_int_equal(mvod_board_corner_count(&b), 4 * 6);
 	mvod_board_format(&b, back, sizeof(back));
 	assert_string_equal(back, "charuco:5x7:0.04:0.02:DICT_6X6_250");
+}
+
+/* Indices are cv::aruco::PREDEFINED_DICTIONARY_NAME values, which the detector is handed. */
+static void dictionary_table(void **state)
+{
+	(void)state;
+	assert_int_equal(mvod_board_dict_count(), 21);
+	const struct {
+		const char *name;
+		int index;
+	} known[] = {{"DICT_4X4_50", 0}, {"DICT_6X6_250", 10}, {"DICT_7X7_1000", 15},
+		     {"DICT_ARUCO_ORIGINAL", 16}, {"DICT_APRILTAG_36h11", 20}};
+	for (size_t i = 0; i < sizeof(known) / sizeof(known[0]); i++)
+		assert_string_equal(mvod_board_dict_name(known[i].index), known[i].name);
+	assert_null(mvod_board_dict_name(21));
+	assert_null(mvod_board_dict_name(-1));
+	char err[256], spec[128];
+	for (int k = 0; k < mvod_board_dict_count(); k++) {
+		struct mvod_board b;
+		snprintf(spec, sizeof(spec), "charuco:3x3:0.04:0.02:%s", mvod_board_dict_name(k));
+		assert_int_equal(mvod_board_parse(spec, &b, err, sizeof(err)), 0);
+		assert_int_equal(b.dict, k);
+	}
+	/* DICT_6X6_50 .. DICT_6X6_1000 share markers; DICT_7X7_50 and the rest do not. */
+	assert_int_equal(mvod_board_dict_family(8), mvod_board_dict_family(11));
+	assert_int_not_equal(mvod_board_dict_family(11), mvod_board_dict_family(12));
+	assert_int_not_equal(mvod_board_dict_family(16), mvod_board_dict_family(17));
+	assert_int_equal(mvod_board_dict_family_size(10), 4);
+	assert_int_equal(mvod_board_dict_family_size(16), 1);
 }
 
 static void chessboard_geometry(void **state)
@@ -115,6 +145,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(charuco_spec_round_trips),
+		cmocka_unit_test(dictionary_table),
 		cmocka_unit_test(chessboard_geometry),
 		cmocka_unit_test(malformed_specs_say_what_is_wrong),
 		cmocka_unit_test(chessboard_drawing),
