@@ -1,4 +1,4 @@
-/* The OpenCV side of mvod calibrate: board detection, calibration, the report, PNG files. */
+/* The OpenCV side of mvod calibrate: board detection, calibration, the report. */
 #ifndef MVOD_CALIB_SHIM_H
 #define MVOD_CALIB_SHIM_H
 
@@ -88,9 +88,6 @@ struct mvod_calib_report {
 
 /* One PNG: corner coverage, per-view error, a sample frame before and after undistortion. */
 int mvod_calib_report_write(const char *path, const struct mvod_calib_report *r);
-
-/* Writes img as PNG through temp+rename, with a pHYs chunk saying dpi when dpi > 0. */
-int mvod_png_write(const char *path, const struct mvod_image *img, double dpi);
 
 #ifdef __cplusplus
 }

@@ -1,13 +1,17 @@
-/* Board specs: every field's malformation, the geometry, and the drawn pattern. */
+/* Board specs: every field's malformation, the geometry, the drawn pattern and its file. */
 #include <errno.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
+#include "calib/image_file.h"
 #include "mvod/board.h"
 
 static void charuco_spec_round_trips(void **state)
@@ -141,6 +145,46 @@ static void charuco_drawing(void **state)
 	assert_int_equal(mvod_board_draw(&b, 2, 0, &img), -EINVAL);
 }
 
+static long file_size(const char *path)
+{
+	struct stat st;
+	return stat(path, &st) ? -1 : (long)st.st_size;
+}
+
+/*
+ * The board's writer: with a resolution, pHYs says it in pixels per metre (300 dpi = 11811);
+ * a request it refuses or an encoder that fails leaves the file written before as it was.
+ */
+static void image_file_writes_whole_or_not_at_all(void **state)
+{
+	(void)state;
+	char dir[] = "/tmp/mvod-test-board-XXXXXX", path[64], err[256];
+	assert_non_null(mkdtemp(dir));
+	snprintf(path, sizeof(path), "%s/board.png", dir);
+	struct mvod_board b;
+	struct mvod_image img;
+	assert_int_equal(mvod_board_parse("chessboard:3x2:0.03", &b, err, sizeof(err)), 0);
+	assert_int_equal(mvod_board_draw(&b, 10, 5, &img), 0);
+	assert_int_equal(mvod_image_file_write(path, ".png", &img, 300), 0);
+	unsigned char head[64];
+	FILE *f = fopen(path, "rb");
+	assert_non_null(f);
+	assert_int_equal(fread(head, 1, sizeof(head), f), sizeof(head));
+	fclose(f);
+	/* Signature 8 + IHDR 25, then pHYs: length 9, type, x and y pixels per metre, unit 1. */
+	static const unsigned char phys[] = {0, 0, 0, 9, 'p', 'H', 'Y', 's', 0, 0, 0x2e, 0x23,
+					     0, 0, 0x2e, 0x23, 1};
+	assert_memory_equal(head + 33, phys, sizeof(phys));
+	long good = file_size(path);
+	assert_int_equal(mvod_image_file_write(path, ".jpg", &img, 300), -EINVAL);
+	assert_int_equal(mvod_image_file_write(path, ".png", &img, -1), -EINVAL);
+	assert_int_equal(mvod_image_file_write(path, ".nosuchformat", &img, 0), -EIO);
+	assert_int_equal(file_size(path), good);
+	mvod_board_image_free(&img);
+	assert_int_equal(unlink(path), 0);
+	assert_int_equal(rmdir(dir), 0); /* fails if a temporary was left beside the file */
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -150,6 +194,7 @@ int main(void)
 		cmocka_unit_test(malformed_specs_say_what_is_wrong),
 		cmocka_unit_test(chessboard_drawing),
 		cmocka_unit_test(charuco_drawing),
+		cmocka_unit_test(image_file_writes_whole_or_not_at_all),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
