@@ -4,6 +4,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "mvod/board.h"
 #include "mvod/calib.h"
@@ -52,6 +53,7 @@ struct mvod_calib_obs {
 	int n;
 	const int *ids;
 	const float *xy;
+	int64_t frame; /* the source frame it was found in: not used by the fit, recorded with it */
 };
 
 struct mvod_calib_fit {
