@@ -28,6 +28,21 @@ struct mvod_board {
 	char dict_name[32];    /* e.g. "DICT_6X6_250" */
 };
 
+/*
+ * The ArUco dictionaries a spec may name, in cv::aruco::PREDEFINED_DICTIONARY_NAME order
+ * (struct mvod_board's dict): how many, and each one's name, e.g. "DICT_6X6_250" (NULL when
+ * dict is out of range).
+ */
+int mvod_board_dict_count(void);
+const char *mvod_board_dict_name(int dict);
+/*
+ * Dictionaries of one family share their markers (DICT_6X6_50 is DICT_6X6_250's first 50):
+ * the family's number, equal for all its members, and how many dictionaries it has (1 for
+ * one that shares with none).
+ */
+int mvod_board_dict_family(int dict);
+int mvod_board_dict_family_size(int dict);
+
 /* Parses a spec; on failure returns -EINVAL and says in err what is wrong and what is expected. */
 int mvod_board_parse(const char *spec, struct mvod_board *b, char *err, size_t errlen);
 /* The spec back, as mvod_board_parse reads it. */

@@ -4,6 +4,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -43,6 +44,7 @@ struct mvod_calib_meta {
 	int n_views;                 /* views the calibration used; 0 = not recorded */
 	const double *view_rms_px;   /* n_views reprojection RMS values, pixels */
 	const double *view_pose;     /* n_views x 6: board-to-camera rvec (rad), tvec (metres) */
+	const int64_t *view_frame;   /* n_views source frame indices (from 0), or NULL */
 	bool has_std;                /* std_K and std_dist hold standard deviations */
 	double std_K[4];             /* fx fy cx cy, pixels */
 	double std_dist[MVOD_MAX_DIST]; /* one per distortion coefficient of the camera */

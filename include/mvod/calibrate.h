@@ -61,6 +61,7 @@ struct mvod_calib_result {
 	double outlier_px;            /* per-view RMS above which a view was dropped */
 	double *view_rms_px;          /* views_used, malloc'ed */
 	double *view_pose;            /* views_used x 6 (rvec, tvec), malloc'ed */
+	int64_t *view_frame;          /* views_used source frame indices, malloc'ed */
 	bool has_std;                 /* standard deviations known (pinhole only) */
 	double std_K[4];              /* fx fy cx cy, pixels */
 	double std_dist[MVOD_MAX_DIST];

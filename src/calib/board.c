@@ -23,6 +23,9 @@ static const struct {
 	{"DICT_APRILTAG_25h9", 35}, {"DICT_APRILTAG_36h10", 2320}, {"DICT_APRILTAG_36h11", 587},
 };
 #define N_DICTS ((int)(sizeof(dicts) / sizeof(dicts[0])))
+/* The first 16 come in families of four sizes (50, 100, 250, 1000 markers of one code). */
+#define N_SIZED_DICTS 16
+#define DICT_FAMILY_SIZE 4
 
 #define CHARUCO_USAGE "charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT, e.g. charuco:5x7:0.04:0.02:DICT_6X6_250"
 #define CHESS_USAGE "chessboard:COLSxROWS:SQUARE_M (inner corners), e.g. chessboard:9x6:0.025"
@@ -164,4 +167,24 @@ void mvod_board_corner(const struct mvod_board *b, int i, double xyz[3])
 	xyz[0] = (i % nx + 1) * b->square_m;
 	xyz[1] = (i / nx + 1) * b->square_m;
 	xyz[2] = 0;
+}
+
+int mvod_board_dict_count(void)
+{
+	return N_DICTS;
+}
+
+const char *mvod_board_dict_name(int dict)
+{
+	return dict >= 0 && dict < N_DICTS ? dicts[dict].name : NULL;
+}
+
+int mvod_board_dict_family(int dict)
+{
+	return dict < N_SIZED_DICTS ? dict / DICT_FAMILY_SIZE : dict;
+}
+
+int mvod_board_dict_family_size(int dict)
+{
+	return dict < N_SIZED_DICTS ? DICT_FAMILY_SIZE : 1;
 }

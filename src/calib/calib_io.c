@@ -338,12 +338,14 @@ static cJSON *number_row(const double *v, int n)
 	return cJSON_CreateDoubleArray(v, n);
 }
 
-/* Per-view records: [{"rms_px": e, "rvec": [..], "tvec": [..]}, ...] in the order used. */
+/* Per-view records: [{"frame": i, "rms_px": e, "rvec": [..], "tvec": [..]}, ...] in the order used. */
 static cJSON *views_to_json(const struct mvod_calib_meta *meta)
 {
 	cJSON *views = cJSON_CreateArray();
 	for (int i = 0; views && i < meta->n_views; i++) {
 		cJSON *v = cJSON_CreateObject();
+		if (meta->view_frame)
+			cJSON_AddNumberToObject(v, "frame", (double)meta->view_frame[i]);
 		cJSON_AddNumberToObject(v, "rms_px", meta->view_rms_px[i]);
 		if (meta->view_pose) {
 			cJSON_AddItemToObject(v, "rvec", number_row(meta->view_pose + 6 * i, 3));

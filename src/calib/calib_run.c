@@ -28,6 +28,7 @@ struct store {
 	struct stored {
 		int n;
 		size_t off;
+		int64_t frame;
 	} *v;
 	int *ids;
 	float *xy;
@@ -67,7 +68,7 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem)
 	return 0;
 }
 
-static int store_add(struct store *s, const struct mvod_calib_found *f)
+static int store_add(struct store *s, const struct mvod_calib_found *f, int64_t frame)
 {
 	size_t cap = (size_t)s->cap;
 	int ret = grow((void **)&s->v, &cap, (size_t)s->n + 1, sizeof(*s->v));
@@ -81,14 +82,15 @@ static int store_add(struct store *s, const struct mvod_calib_found *f)
 		return ret;
 	memcpy(s->ids + s->used, f->ids, sizeof(*s->ids) * (size_t)f->n);
 	memcpy(s->xy + 2 * s->used, f->xy, 2 * sizeof(*s->xy) * (size_t)f->n);
-	s->v[s->n++] = (struct stored){f->n, s->used};
+	s->v[s->n++] = (struct stored){f->n, s->used, frame};
 	s->used = need;
 	return 0;
 }
 
 static struct mvod_calib_obs store_obs(const struct store *s, int i)
 {
-	return (struct mvod_calib_obs){s->v[i].n, s->ids + s->v[i].off, s->xy + 2 * s->v[i].off};
+	return (struct mvod_calib_obs){s->v[i].n, s->ids + s->v[i].off, s->xy + 2 * s->v[i].off,
+				       s->v[i].frame};
 }
 
 static void store_free(struct store *s)
@@ -102,7 +104,9 @@ void mvod_calib_result_free(struct mvod_calib_result *res)
 {
 	free(res->view_rms_px);
 	free(res->view_pose);
+	free(res->view_frame);
 	res->view_rms_px = res->view_pose = NULL;
+	res->view_frame = NULL;
 }
 
 static int min_corners(const struct mvod_calib_opts *o)
@@ -176,9 +180,10 @@ static void note_missing(struct scan *sc, struct mvod_calib_det *det, const stru
 }
 
 static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
-		    struct mvod_calib_found *f, const struct mvod_image *img, struct store *s,
+		    struct mvod_calib_found *f, const struct mvod_frame *fr, struct store *s,
 		    struct scan *sc)
 {
+	const struct mvod_image *img = &fr->img;
 	int ret = mvod_calib_detect(det, img, f);
 	if (ret || f->repeat) {
 		sc->repeats += f->repeat;
@@ -193,7 +198,7 @@ static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
 		return 0;
 	}
 	sc->with_board++;
-	ret = store_add(s, f);
+	ret = store_add(s, f, fr->index);
 	if (ret)
 		return ret;
 	struct mvod_calib_obs v = store_obs(s, s->n - 1);
@@ -236,7 +241,7 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 			break;
 		}
 		sc->frames++;
-		ret = on_frame(o, det, &f, &fr.img, s, sc);
+		ret = on_frame(o, det, &f, &fr, s, sc);
 		if (ret)
 			mvod_errf(err, errlen, ret, "%s: frame %lld: board detection failed: %s",
 				  o->source, (long long)fr.index, strerror(-ret));
@@ -391,6 +396,8 @@ static void finish(const struct fitting *ft, const struct scan *sc, struct mvod_
 	res->has_std = ft->fit.has_std;
 	memcpy(res->std_K, ft->fit.std_K, sizeof(res->std_K));
 	memcpy(res->std_dist, ft->fit.std_dist, sizeof(res->std_dist));
+	for (int i = 0; i < ft->n; i++)
+		res->view_frame[i] = ft->views[i].frame;
 	uint64_t cells = 0;
 	for (int i = 0; i < ft->n; i++)
 		cells |= mvod_calib_cells(ft->views[i].xy, ft->views[i].n, sc->w, sc->h);
@@ -464,7 +471,8 @@ int mvod_calibrate(const struct mvod_calib_opts *o, struct mvod_calib_result *re
 	ft.views = malloc(sizeof(*ft.views) * m);
 	res->view_rms_px = ft.fit.view_rms_px = malloc(sizeof(double) * m);
 	res->view_pose = ft.fit.view_pose = malloc(sizeof(double) * 6 * m);
-	ret = ft.views && res->view_rms_px && res->view_pose
+	res->view_frame = malloc(sizeof(*res->view_frame) * m);
+	ret = ft.views && res->view_rms_px && res->view_pose && res->view_frame
 		      ? select_views(o, &s, &sc, &ft, err, errlen)
 		      : mvod_errf(err, errlen, -ENOMEM, "out of memory for %d views", o->max_views);
 	if (ret)
@@ -494,6 +502,7 @@ void mvod_calib_result_meta(const struct mvod_calib_result *res, const struct mv
 	meta->n_views = res->views_used;
 	meta->view_rms_px = res->view_rms_px;
 	meta->view_pose = res->view_pose;
+	meta->view_frame = res->view_frame;
 	meta->has_std = res->has_std;
 	memcpy(meta->std_K, res->std_K, sizeof(meta->std_K));
 	memcpy(meta->std_dist, res->std_dist, sizeof(meta->std_dist));

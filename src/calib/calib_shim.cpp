@@ -24,8 +24,6 @@ namespace {
  * usable for calibration. Corners are then refined in the full image.
  */
 const int DETECT_MAX_SIDE = 1280;
-/* Dictionaries in groups of four share their markers (DICT_6X6_50 is DICT_6X6_250's first 50). */
-const int DICT_FAMILY_SIZE = 4, N_SIZED_DICTS = 16, N_DICTS = 21;
 
 /*
  * Each Levenberg-Marquardt step of OpenCV's calibration costs a dense solve cubic in 6 x views
@@ -33,30 +31,6 @@ const int DICT_FAMILY_SIZE = 4, N_SIZED_DICTS = 16, N_DICTS = 21;
  * below DBL_EPSILON. A relative update of 1e-8 moves fx by under 1e-5 px.
  */
 const cv::TermCriteria SOLVER_STOP(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 30, 1e-8);
-
-const char *const dict_names[N_DICTS] = {
-	"DICT_4X4_50", "DICT_4X4_100", "DICT_4X4_250", "DICT_4X4_1000", "DICT_5X5_50",
-	"DICT_5X5_100", "DICT_5X5_250", "DICT_5X5_1000", "DICT_6X6_50", "DICT_6X6_100",
-	"DICT_6X6_250", "DICT_6X6_1000", "DICT_7X7_50", "DICT_7X7_100", "DICT_7X7_250",
-	"DICT_7X7_1000", "DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5", "DICT_APRILTAG_25h9",
-	"DICT_APRILTAG_36h10", "DICT_APRILTAG_36h11",
-};
-
-int dict_family(int d)
-{
-	return d < N_SIZED_DICTS ? d / DICT_FAMILY_SIZE : d;
-}
-
-cv::Mat grey_of(const mvod_image &img)
-{
-	cv::Mat m(img.h, img.w, img.fmt == MVOD_PIX_BGR ? CV_8UC3 : CV_8UC1, img.data,
-		  (size_t)img.stride);
-	if (img.fmt == MVOD_PIX_GREY)
-		return m;
-	cv::Mat g;
-	cv::cvtColor(m, g, cv::COLOR_BGR2GRAY);
-	return g;
-}
 
 const cv::TermCriteria SUBPIX_STOP(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 0.001);
 
@@ -76,13 +50,26 @@ void refine_chessboard(const cv::Mat &grey, std::vector<cv::Point2f> &pts, int c
 
 } // namespace
 
+using Quads = std::vector<std::vector<cv::Point2f>>;
+
+/*
+ * Everything a frame's detection writes lives here and keeps its capacity from frame to frame:
+ * after the first few frames the detection path allocates only what OpenCV allocates inside.
+ */
 struct mvod_calib_det {
 	mvod_board board;
 	cv::Ptr<cv::aruco::Dictionary> dict;
 	cv::Ptr<cv::aruco::CharucoBoard> charuco;
 	cv::Ptr<cv::aruco::DetectorParameters> params;
+	cv::Mat grey;        /* a BGR frame converted */
 	cv::Mat small;
-	cv::Mat thumb; /* of the last examined frame */
+	cv::Mat inverted;    /* small, white on black */
+	cv::Mat thumb;       /* of the last examined frame */
+	cv::Mat next_thumb;  /* of this one */
+	Quads markers, rejected, inv_markers, inv_rejected;
+	std::vector<int> ids, inv_ids, pt_ids;
+	std::vector<cv::Point2f> pts, layout, projected, hull_img, hull_layout;
+	std::vector<double> residuals;
 };
 
 namespace {
@@ -94,13 +81,24 @@ namespace {
 const cv::Size THUMB(40, 30);
 const double REPEAT_GREY_LEVELS = 1.0;
 
+/* img as grey: a view of it, or its conversion in d.grey. */
+cv::Mat grey_of(mvod_calib_det &d, const mvod_image &img)
+{
+	cv::Mat m(img.h, img.w, img.fmt == MVOD_PIX_BGR ? CV_8UC3 : CV_8UC1, img.data,
+		  (size_t)img.stride);
+	if (img.fmt == MVOD_PIX_GREY)
+		return m;
+	cv::cvtColor(m, d.grey, cv::COLOR_BGR2GRAY);
+	return d.grey;
+}
+
 bool is_repeat(mvod_calib_det &d, const cv::Mat &grey)
 {
-	cv::Mat t;
-	cv::resize(grey, t, THUMB, 0, 0, cv::INTER_AREA);
-	if (!d.thumb.empty() && cv::norm(t, d.thumb, cv::NORM_L1) / THUMB.area() < REPEAT_GREY_LEVELS)
+	cv::resize(grey, d.next_thumb, THUMB, 0, 0, cv::INTER_AREA);
+	if (!d.thumb.empty() &&
+	    cv::norm(d.next_thumb, d.thumb, cv::NORM_L1) / THUMB.area() < REPEAT_GREY_LEVELS)
 		return true;
-	d.thumb = t;
+	cv::swap(d.thumb, d.next_thumb);
 	return false;
 }
 
@@ -130,7 +128,7 @@ void detect_chessboard(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found 
 {
 	double s = detection_image(d, grey);
 	cv::Size pattern(d.board.cols, d.board.rows);
-	std::vector<cv::Point2f> pts;
+	std::vector<cv::Point2f> &pts = d.pts;
 	bool found = cv::findChessboardCornersSB(d.small, pattern, pts, cv::CALIB_CB_NORMALIZE_IMAGE);
 	if (!found)
 		found = cv::findChessboardCorners(d.small, pattern, pts,
@@ -146,49 +144,54 @@ void detect_chessboard(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found 
 	store_corners(pts, nullptr, f);
 }
 
-/* Markers of the board's dictionary, in full-image pixels; strays (ids off the board) counted. */
-void find_markers(mvod_calib_det &d, const cv::Mat &grey, std::vector<std::vector<cv::Point2f>> &corners,
-		  std::vector<int> &ids, mvod_calib_found &f)
+/* Moves the markers on the board to the front of d.markers, in full-image pixels; counts strays. */
+void keep_on_board(mvod_calib_det &d, double s, mvod_calib_found &f)
+{
+	int on_board = (int)d.charuco->ids.size();
+	size_t kept = 0;
+	for (size_t i = 0; i < d.ids.size(); i++) {
+		f.max_id = std::max(f.max_id, d.ids[i]);
+		if (d.ids[i] >= on_board) {
+			f.stray++;
+			continue;
+		}
+		for (auto &p : d.markers[i])
+			p *= 1.0 / s;
+		d.markers[kept].swap(d.markers[i]);
+		d.ids[kept++] = d.ids[i];
+	}
+	d.markers.resize(kept);
+	d.ids.resize(kept);
+}
+
+/* Markers of the board's dictionary into d.markers and d.ids, in full-image pixels. */
+void find_markers(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
 {
 	double s = detection_image(d, grey);
-	std::vector<std::vector<cv::Point2f>> all, rejected;
-	std::vector<int> all_ids;
-	cv::aruco::detectMarkers(d.small, d.dict, all, all_ids, d.params, rejected);
+	cv::aruco::detectMarkers(d.small, d.dict, d.markers, d.ids, d.params, d.rejected);
 	/*
 	 * A board printed white-on-black (or shown inverted on a screen) is still a board. OpenCV's
 	 * detectInvertedMarker would look for both at once, but it loses markers of normal boards
 	 * (13 of 17 on some mvod-synth views), so the inverted image is only tried when the
 	 * normal one shows too few markers to interpolate corners from.
 	 */
-	if (all_ids.size() < 2) {
-		cv::Mat inv = 255 - d.small;
-		std::vector<std::vector<cv::Point2f>> inv_all, inv_rejected;
-		std::vector<int> inv_ids;
-		cv::aruco::detectMarkers(inv, d.dict, inv_all, inv_ids, d.params, inv_rejected);
-		if (inv_ids.size() > all_ids.size()) {
-			all.swap(inv_all);
-			all_ids.swap(inv_ids);
-			rejected.swap(inv_rejected);
+	if (d.ids.size() < 2) {
+		cv::bitwise_not(d.small, d.inverted);
+		cv::aruco::detectMarkers(d.inverted, d.dict, d.inv_markers, d.inv_ids, d.params,
+					 d.inv_rejected);
+		if (d.inv_ids.size() > d.ids.size()) {
+			d.markers.swap(d.inv_markers);
+			d.ids.swap(d.inv_ids);
+			d.rejected.swap(d.inv_rejected);
 		}
 	}
-	int on_board = (int)d.charuco->ids.size();
-	for (size_t i = 0; i < all_ids.size(); i++) {
-		f.max_id = std::max(f.max_id, all_ids[i]);
-		if (all_ids[i] >= on_board) {
-			f.stray++;
-			continue;
-		}
-		for (auto &p : all[i])
-			p *= 1.0 / s;
-		corners.push_back(all[i]);
-		ids.push_back(all_ids[i]);
-	}
-	for (auto &r : rejected)
+	keep_on_board(d, s, f);
+	for (auto &r : d.rejected)
 		for (auto &p : r)
 			p *= 1.0 / s;
-	if (!ids.empty())
-		cv::aruco::refineDetectedMarkers(grey, d.charuco, corners, ids, rejected);
-	f.markers = (int)ids.size();
+	if (!d.ids.empty())
+		cv::aruco::refineDetectedMarkers(grey, d.charuco, d.markers, d.ids, d.rejected);
+	f.markers = (int)d.ids.size();
 }
 
 /*
@@ -197,29 +200,31 @@ void find_markers(mvod_calib_det &d, const cv::Mat &grey, std::vector<std::vecto
  * by the wrong layout, a square or more off: calibrating on them gives nonsense. Half a square
  * of median residual leaves room for strong lens distortion.
  */
-bool fits_layout(const mvod_board &b, const std::vector<cv::Point2f> &pts, const std::vector<int> &ids)
+bool fits_layout(mvod_calib_det &d)
 {
+	const std::vector<cv::Point2f> &pts = d.pts;
 	if (pts.size() < 5)
 		return true;
-	std::vector<cv::Point2f> board;
-	for (int id : ids) {
+	d.layout.clear();
+	for (int id : d.pt_ids) {
 		double p[3];
-		mvod_board_corner(&b, id, p);
-		board.emplace_back((float)p[0], (float)p[1]);
+		mvod_board_corner(&d.board, id, p);
+		d.layout.emplace_back((float)p[0], (float)p[1]);
 	}
-	cv::Mat H = cv::findHomography(board, pts, 0);
+	cv::Mat H = cv::findHomography(d.layout, pts, 0);
 	if (H.empty())
 		return false;
-	std::vector<cv::Point2f> proj, hull_img, hull_board;
-	cv::perspectiveTransform(board, proj, H);
-	std::vector<double> res;
+	cv::perspectiveTransform(d.layout, d.projected, H);
+	std::vector<double> &res = d.residuals;
+	res.clear();
 	for (size_t i = 0; i < pts.size(); i++)
-		res.push_back(cv::norm(proj[i] - pts[i]));
+		res.push_back(cv::norm(d.projected[i] - pts[i]));
 	std::nth_element(res.begin(), res.begin() + (long)res.size() / 2, res.end());
-	cv::convexHull(pts, hull_img);
-	cv::convexHull(board, hull_board);
-	double px_per_m = std::sqrt(cv::contourArea(hull_img) / std::max(cv::contourArea(hull_board), 1e-12));
-	return res[res.size() / 2] < 0.5 * b.square_m * px_per_m;
+	cv::convexHull(pts, d.hull_img);
+	cv::convexHull(d.layout, d.hull_layout);
+	double px_per_m = std::sqrt(cv::contourArea(d.hull_img) /
+				    std::max(cv::contourArea(d.hull_layout), 1e-12));
+	return res[res.size() / 2] < 0.5 * d.board.square_m * px_per_m;
 }
 
 /*
@@ -230,8 +235,7 @@ bool fits_layout(const mvod_board &b, const std::vector<cv::Point2f> &pts, const
  * best of 0.5 / 0.75 / 0.9 on mvod-synth views (RMS 0.049 px against exact corners) and matches
  * OpenCV's reference RMS on its real photos (0.182 px).
  */
-void refine_charuco(const cv::Mat &grey, const std::vector<std::vector<cv::Point2f>> &markers,
-		    std::vector<cv::Point2f> &pts)
+void refine_charuco(const cv::Mat &grey, const Quads &markers, std::vector<cv::Point2f> &pts)
 {
 	const double margin = 0.75;
 	for (auto &p : pts) {
@@ -240,31 +244,27 @@ void refine_charuco(const cv::Mat &grey, const std::vector<std::vector<cv::Point
 			for (const auto &c : m)
 				chebyshev = std::min(chebyshev, (double)std::max(std::abs(c.x - p.x), std::abs(c.y - p.y)));
 		int half = std::clamp((int)(chebyshev * margin), 2, 11);
-		std::vector<cv::Point2f> one{p};
-		cv::cornerSubPix(grey, one, cv::Size(half, half), cv::Size(-1, -1), SUBPIX_STOP);
-		p = one[0];
+		/* Refined in place, through a header on the one point. */
+		cv::cornerSubPix(grey, cv::Mat(1, 1, CV_32FC2, &p), cv::Size(half, half),
+				 cv::Size(-1, -1), SUBPIX_STOP);
 	}
 }
 
 void detect_charuco(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
 {
-	std::vector<std::vector<cv::Point2f>> corners;
-	std::vector<int> ids;
-	find_markers(d, grey, corners, ids, f);
-	if (ids.empty())
+	find_markers(d, grey, f);
+	if (d.ids.empty())
 		return;
-	std::vector<cv::Point2f> pts;
-	std::vector<int> pt_ids;
-	cv::aruco::interpolateCornersCharuco(corners, ids, grey, d.charuco, pts, pt_ids);
+	cv::aruco::interpolateCornersCharuco(d.markers, d.ids, grey, d.charuco, d.pts, d.pt_ids);
 	/*
 	 * OpenCV 4.6 returns its refined corners shifted by (+0.5, +0.5) px (opencv#25539, fixed
 	 * upstream in 2026), which would bias cx and cy: 0.71 px mean error on mvod-synth views.
 	 * Refining again from there converges on the saddle itself, whichever OpenCV this runs on.
 	 */
-	refine_charuco(grey, corners, pts);
-	f.mislaid = !fits_layout(d.board, pts, pt_ids);
+	refine_charuco(grey, d.markers, d.pts);
+	f.mislaid = !fits_layout(d);
 	if (!f.mislaid)
-		store_corners(pts, &pt_ids, f);
+		store_corners(d.pts, &d.pt_ids, f);
 }
 
 /* "a chessboard with CxR inner corners" when one of any size is in view. */
@@ -282,16 +282,19 @@ bool find_any_chessboard(const cv::Mat &grey, char *what, size_t len)
 bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, char *what, size_t len)
 {
 	auto params = cv::aruco::DetectorParameters::create();
-	for (int k = 0; k < N_DICTS; k++) {
-		if (d.board.kind == MVOD_BOARD_CHARUCO && dict_family(k) == dict_family(d.board.dict))
+	for (int k = 0; k < mvod_board_dict_count(); k++) {
+		if (d.board.kind == MVOD_BOARD_CHARUCO &&
+		    mvod_board_dict_family(k) == mvod_board_dict_family(d.board.dict))
 			continue;
 		std::vector<std::vector<cv::Point2f>> corners;
 		std::vector<int> ids;
 		cv::aruco::detectMarkers(grey, cv::aruco::getPredefinedDictionary(k), corners, ids, params);
 		/* One or two hits can be chance codes in texture; a board shows many. */
 		if (ids.size() >= 4) {
-			std::snprintf(what, len, "%zu markers of %s%s", ids.size(), dict_names[k],
-				      k < N_SIZED_DICTS ? " (or a larger dictionary of its family)" : "");
+			std::snprintf(what, len, "%zu markers of %s%s", ids.size(), mvod_board_dict_name(k),
+				      mvod_board_dict_family_size(k) > 1
+					      ? " (or a larger dictionary of its family)"
+					      : "");
 			return true;
 		}
 	}
@@ -335,7 +338,7 @@ extern "C" int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_ima
 	f->max_id = -1;
 	f->mislaid = false;
 	return mvod_guarded([&] {
-		cv::Mat grey = grey_of(*img);
+		cv::Mat grey = grey_of(*d, *img);
 		f->repeat = is_repeat(*d, grey);
 		if (f->repeat)
 			return 0;
@@ -352,7 +355,7 @@ extern "C" int mvod_calib_diagnose(struct mvod_calib_det *d, const struct mvod_i
 {
 	what[0] = '\0';
 	return mvod_guarded([&] {
-		cv::Mat grey = grey_of(*img);
+		cv::Mat grey = grey_of(*d, *img);
 		detection_image(*d, grey);
 		if (!find_other_dictionary(*d, d->small, what, len))
 			find_any_chessboard(d->small, what, len);

@@ -1,9 +1,10 @@
-/* The OpenCV side of mvod calibrate: board detection, calibration, the report, PNG files. */
+/* The OpenCV side of mvod calibrate: board detection, calibration, the report. */
 #ifndef MVOD_CALIB_SHIM_H
 #define MVOD_CALIB_SHIM_H
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #include "mvod/board.h"
 #include "mvod/calib.h"
@@ -52,6 +53,7 @@ struct mvod_calib_obs {
 	int n;
 	const int *ids;
 	const float *xy;
+	int64_t frame; /* the source frame it was found in: not used by the fit, recorded with it */
 };
 
 struct mvod_calib_fit {
@@ -88,9 +90,6 @@ struct mvod_calib_report {
 
 /* One PNG: corner coverage, per-view error, a sample frame before and after undistortion. */
 int mvod_calib_report_write(const char *path, const struct mvod_calib_report *r);
-
-/* Writes img as PNG through temp+rename, with a pHYs chunk saying dpi when dpi > 0. */
-int mvod_png_write(const char *path, const struct mvod_image *img, double dpi);
 
 #ifdef __cplusplus
 }

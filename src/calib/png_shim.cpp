@@ -1,9 +1,10 @@
-/* PNG files that say their print resolution, so a board printed at 100 % has its true size. */
-#include "calib/calib_shim.h"
+/* Image files, and PNG files that say their print resolution. */
+#include "calib/image_file.h"
 
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -42,21 +43,23 @@ std::vector<uchar> phys_chunk(double dpi)
 
 } // namespace
 
-extern "C" int mvod_png_write(const char *path, const struct mvod_image *img, double dpi)
+extern "C" int mvod_image_file_write(const char *path, const char *ext,
+				     const struct mvod_image *img, double dpi)
 {
-	if (!std::isfinite(dpi) || dpi < 0)
+	if (!std::isfinite(dpi) || dpi < 0 || (dpi > 0 && std::strcmp(ext, ".png") != 0))
 		return -EINVAL;
 	return mvod_guarded([&] {
 		cv::Mat m(img->h, img->w, img->fmt == MVOD_PIX_BGR ? CV_8UC3 : CV_8UC1, img->data,
 			  (size_t)img->stride);
-		/* Encoded before any file exists, so an encoder error leaves nothing behind. */
-		std::vector<uchar> png;
-		if (!cv::imencode(".png", m, png) || png.size() < AFTER_IHDR)
+		std::vector<uchar> buf;
+		if (!cv::imencode(ext, m, buf))
 			return -EIO;
 		if (dpi > 0) {
+			if (buf.size() < AFTER_IHDR)
+				return -EIO;
 			std::vector<uchar> phys = phys_chunk(dpi);
-			png.insert(png.begin() + AFTER_IHDR, phys.begin(), phys.end());
+			buf.insert(buf.begin() + AFTER_IHDR, phys.begin(), phys.end());
 		}
-		return mvod_write_replace(path, png.data(), png.size());
+		return mvod_write_replace(path, buf.data(), buf.size());
 	});
 }

@@ -11,6 +11,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "calib/image_file.h"
 #include "mvod/calibrate.h"
 #include "util/shim_guard.hpp"
 
@@ -161,6 +162,6 @@ extern "C" int mvod_calib_report_write(const char *path, const struct mvod_calib
 		draw_errors(c, *r);
 		draw_samples(c, *r);
 		mvod_image view = {c.cols, c.rows, (int)c.step, MVOD_PIX_BGR, c.data};
-		return mvod_png_write(path, &view, 0);
+		return mvod_image_file_write(path, ".png", &view, 0);
 	});
 }

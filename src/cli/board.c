@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "calib/calib_shim.h"
+#include "calib/image_file.h"
 #include "mvod/board.h"
 #include "mvod/log.h"
 
@@ -124,7 +124,7 @@ static int write_board(const struct cli *c)
 	struct mvod_image img;
 	int ret = mvod_board_draw(&c->board, pps, pps, &img);
 	if (!ret)
-		ret = mvod_png_write(c->out, &img, c->dpi);
+		ret = mvod_image_file_write(c->out, ".png", &img, c->dpi);
 	if (ret)
 		LOG(ERROR, "cannot write %s: %s", c->out, strerror(-ret));
 	else if (!c->quiet)

@@ -6,11 +6,10 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/highgui.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "calib/image_file.h"
 #include "mvod/plot.h"
-#include "util/atomic_file.h"
 #include "util/errbuf.h"
 #include "util/shim_guard.hpp"
 
@@ -152,12 +151,10 @@ extern "C" int mvod_view_write_png(const struct mvod_view *v, int64_t now_us,
 	return mvod_guarded([&] {
 		cv::Mat canvas;
 		int ret = render(v, now_us, labels, canvas);
-		std::vector<uchar> png;
 		if (ret)
 			return ret;
-		if (!cv::imencode(".png", canvas, png))
-			return -EIO;
-		return mvod_write_replace(path, png.data(), png.size());
+		mvod_image img = {canvas.cols, canvas.rows, (int)canvas.step, MVOD_PIX_BGR, canvas.data};
+		return mvod_image_file_write(path, ".png", &img, 0);
 	});
 }
 

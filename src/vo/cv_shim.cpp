@@ -149,7 +149,13 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 			d->f2d = cv::ORB::create(max_features);
 		d->desc_bytes = mvod_cv_desc_bytes(kind);
 		d->kps.reserve((size_t)max_features * 2);
-		d->desc.create(max_features * 2, d->desc_bytes, CV_8U);
+		/*
+		 * Shaped as the detector returns a frame with max_features features (SIFT: rows of
+		 * 128 CV_32F, ORB: 32 CV_8U), so that Mat::create keeps this buffer for such frames.
+		 * Any other shape makes OpenCV allocate anew: SIFT keeps keypoints tied with the
+		 * last one, 2001 of 2000 on 3 of 20 KITTI frames, and those frames still do.
+		 */
+		d->desc.create(max_features, d->f2d->descriptorSize(), d->f2d->descriptorType());
 		*out = d;
 		return 0;
 	});

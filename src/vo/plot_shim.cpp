@@ -12,7 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "util/atomic_file.h"
+#include "calib/image_file.h"
 #include "util/shim_guard.hpp"
 
 namespace {
@@ -450,13 +450,10 @@ bool can_write(const char *path)
 	return !extension_of(path).empty() && cv::haveImageWriter(path);
 }
 
-/* Encoded before any file exists, so an encoder error leaves nothing behind. */
-int write_image(const char *path, const cv::Mat &img)
+int write_image(const char *path, const cv::Mat &bgr)
 {
-	std::vector<uchar> buf;
-	if (!cv::imencode(extension_of(path), img, buf))
-		return -EIO;
-	return mvod_write_replace(path, buf.data(), buf.size());
+	mvod_image img = {bgr.cols, bgr.rows, (int)bgr.step, MVOD_PIX_BGR, bgr.data};
+	return mvod_image_file_write(path, extension_of(path).c_str(), &img, 0);
 }
 
 int plot_topdown(const char *path, const char *title, const Path &est, const double *heading,

@@ -1,12 +1,17 @@
-/* Board specs: every field's malformation, the geometry, and the drawn pattern. */
+/* Board specs: every field's malformation, the geometry, the drawn pattern and its file. */
 #include <errno.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
+#include "calib/image_file.h"
 #include "mvod/board.h"
 
 static void charuco_spec_round_trips(void **state)
@@ -23,6 +28,35 @@ static void charuco_spec_round_trips(void **state)
 	assert_int_equal(mvod_board_corner_count(&b), 4 * 6);
 	mvod_board_format(&b, back, sizeof(back));
 	assert_string_equal(back, "charuco:5x7:0.04:0.02:DICT_6X6_250");
+}
+
+/* Indices are cv::aruco::PREDEFINED_DICTIONARY_NAME values, which the detector is handed. */
+static void dictionary_table(void **state)
+{
+	(void)state;
+	assert_int_equal(mvod_board_dict_count(), 21);
+	const struct {
+		const char *name;
+		int index;
+	} known[] = {{"DICT_4X4_50", 0}, {"DICT_6X6_250", 10}, {"DICT_7X7_1000", 15},
+		     {"DICT_ARUCO_ORIGINAL", 16}, {"DICT_APRILTAG_36h11", 20}};
+	for (size_t i = 0; i < sizeof(known) / sizeof(known[0]); i++)
+		assert_string_equal(mvod_board_dict_name(known[i].index), known[i].name);
+	assert_null(mvod_board_dict_name(21));
+	assert_null(mvod_board_dict_name(-1));
+	char err[256], spec[128];
+	for (int k = 0; k < mvod_board_dict_count(); k++) {
+		struct mvod_board b;
+		snprintf(spec, sizeof(spec), "charuco:3x3:0.04:0.02:%s", mvod_board_dict_name(k));
+		assert_int_equal(mvod_board_parse(spec, &b, err, sizeof(err)), 0);
+		assert_int_equal(b.dict, k);
+	}
+	/* DICT_6X6_50 .. DICT_6X6_1000 share markers; DICT_7X7_50 and the rest do not. */
+	assert_int_equal(mvod_board_dict_family(8), mvod_board_dict_family(11));
+	assert_int_not_equal(mvod_board_dict_family(11), mvod_board_dict_family(12));
+	assert_int_not_equal(mvod_board_dict_family(16), mvod_board_dict_family(17));
+	assert_int_equal(mvod_board_dict_family_size(10), 4);
+	assert_int_equal(mvod_board_dict_family_size(16), 1);
 }
 
 static void chessboard_geometry(void **state)
@@ -111,14 +145,56 @@ static void charuco_drawing(void **state)
 	assert_int_equal(mvod_board_draw(&b, 2, 0, &img), -EINVAL);
 }
 
+static long file_size(const char *path)
+{
+	struct stat st;
+	return stat(path, &st) ? -1 : (long)st.st_size;
+}
+
+/*
+ * The board's writer: with a resolution, pHYs says it in pixels per metre (300 dpi = 11811);
+ * a request it refuses or an encoder that fails leaves the file written before as it was.
+ */
+static void image_file_writes_whole_or_not_at_all(void **state)
+{
+	(void)state;
+	char dir[] = "/tmp/mvod-test-board-XXXXXX", path[64], err[256];
+	assert_non_null(mkdtemp(dir));
+	snprintf(path, sizeof(path), "%s/board.png", dir);
+	struct mvod_board b;
+	struct mvod_image img;
+	assert_int_equal(mvod_board_parse("chessboard:3x2:0.03", &b, err, sizeof(err)), 0);
+	assert_int_equal(mvod_board_draw(&b, 10, 5, &img), 0);
+	assert_int_equal(mvod_image_file_write(path, ".png", &img, 300), 0);
+	unsigned char head[64];
+	FILE *f = fopen(path, "rb");
+	assert_non_null(f);
+	assert_int_equal(fread(head, 1, sizeof(head), f), sizeof(head));
+	fclose(f);
+	/* Signature 8 + IHDR 25, then pHYs: length 9, type, x and y pixels per metre, unit 1. */
+	static const unsigned char phys[] = {0, 0, 0, 9, 'p', 'H', 'Y', 's', 0, 0, 0x2e, 0x23,
+					     0, 0, 0x2e, 0x23, 1};
+	assert_memory_equal(head + 33, phys, sizeof(phys));
+	long good = file_size(path);
+	assert_int_equal(mvod_image_file_write(path, ".jpg", &img, 300), -EINVAL);
+	assert_int_equal(mvod_image_file_write(path, ".png", &img, -1), -EINVAL);
+	assert_int_equal(mvod_image_file_write(path, ".nosuchformat", &img, 0), -EIO);
+	assert_int_equal(file_size(path), good);
+	mvod_board_image_free(&img);
+	assert_int_equal(unlink(path), 0);
+	assert_int_equal(rmdir(dir), 0); /* fails if a temporary was left beside the file */
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(charuco_spec_round_trips),
+		cmocka_unit_test(dictionary_table),
 		cmocka_unit_test(chessboard_geometry),
 		cmocka_unit_test(malformed_specs_say_what_is_wrong),
 		cmocka_unit_test(chessboard_drawing),
 		cmocka_unit_test(charuco_drawing),
+		cmocka_unit_test(image_file_writes_whole_or_not_at_all),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -158,8 +158,10 @@ static void file_records_the_calibration(void **state)
 				.cy = 240, .n_dist = 5, .dist = {-0.1, 0.01, 0, 0, 0},
 				.has_focus = true, .focus = 120};
 	const double rms[2] = {0.11, 0.13}, pose[12] = {0.1, 0.2, 0.3, 0.01, 0.02, 0.5};
+	const int64_t frame[2] = {7, 1234567};
 	struct mvod_calib_meta meta = {.rms_px = 0.12, .board = "chessboard:9x6:0.025", .source = "t",
 				       .n_views = 2, .view_rms_px = rms, .view_pose = pose,
+				       .view_frame = frame,
 				       .has_std = true, .std_K = {1, 2, 3, 4}, .verdict = "good"};
 	char path[] = "/tmp/mvod-test-calibrate-XXXXXX";
 	int fd = mkstemp(path);
@@ -178,7 +180,8 @@ static void file_records_the_calibration(void **state)
 	text[n] = '\0';
 	fclose(f);
 	unlink(path);
-	static const char *const keys[] = {"\"views_used\":\t2", "\"rvec\"", "\"tvec\"", "\"std_dev\"",
+	static const char *const keys[] = {"\"views_used\":\t2", "\"frame\":\t7", "\"frame\":\t1234567",
+					   "\"rvec\"", "\"tvec\"", "\"std_dev\"",
 					   "\"focus\":\t120", "\"verdict\":\t\"good\"", "\"created\""};
 	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
 		if (!strstr(text, keys[i]))
