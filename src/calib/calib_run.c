@@ -6,11 +6,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "calib/calib_shim.h"
 #include "mvod/capture.h"
 #include "mvod/log.h"
+#include "util/clock.h"
 #include "util/errbuf.h"
 
 /* Frames without the board that are examined for what else they show (slow), and how far apart. */
@@ -45,13 +45,6 @@ struct scan {
 	struct mvod_image sample;  /* the frame whose board spans most of the image (report) */
 	float sample_extent;
 };
-
-static double now_s(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static int grow(void **p, size_t *cap, size_t need, size_t elem)
 {
@@ -221,9 +214,9 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 	struct mvod_calib_found f = {.ids = malloc(sizeof(int) * (size_t)cap),
 				     .xy = malloc(2 * sizeof(float) * (size_t)cap)};
 	int ret = f.ids && f.xy ? 0 : -ENOMEM;
-	double next_progress = now_s() + PROGRESS_S;
+	double next_progress = mvod_now_s() + PROGRESS_S;
 	while (!ret && !(o->max_frames && sc->frames >= o->max_frames) && !(o->stop && *o->stop)) {
-		if (now_s() >= next_progress) {
+		if (mvod_now_s() >= next_progress) {
 			LOG(INFO, "calibrate: %lld frames read, %lld with the board so far",
 			    (long long)sc->frames, (long long)sc->with_board);
 			next_progress += PROGRESS_S;
@@ -458,9 +451,9 @@ int mvod_calibrate(const struct mvod_calib_opts *o, struct mvod_calib_result *re
 	struct store s = {0};
 	struct scan sc = {.max_id = -1};
 	struct fitting ft = {0};
-	double t0 = now_s();
+	double t0 = mvod_now_s();
 	int ret = scan_source(o, &s, &sc, err, errlen);
-	double t1 = now_s();
+	double t1 = mvod_now_s();
 	res->read_s = t1 - t0;
 	res->frames_read = sc.frames;
 	res->frames_with_board = sc.with_board;
@@ -482,7 +475,7 @@ int mvod_calibrate(const struct mvod_calib_opts *o, struct mvod_calib_result *re
 	if (ret)
 		goto out;
 	finish(&ft, &sc, res);
-	res->solve_s = now_s() - t1;
+	res->solve_s = mvod_now_s() - t1;
 	if (o->report)
 		ret = write_report(o, &ft, &sc, res, err, errlen);
 out:
