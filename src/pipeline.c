@@ -559,8 +559,11 @@ static int write_plot(struct run *r)
 	char title[256];
 	snprintf(title, sizeof(title), "mvod: %s%s", r->o->source,
 		 r->plot_aligned ? " (Sim(3)-aligned to ground truth)" : "");
+	/* Metres once the ground truth set the scale, by --scale gt or by the Sim(3) alignment. */
+	bool metric = r->plot_aligned || r->o->vo.scale_mode == MVOD_SCALE_MODE_GT;
 	int ret = mvod_plot_topdown(r->o->plot, title, r->est_path.xyz, r->est_path.n,
-				    r->have_prev ? r->prev_est.R : NULL, r->gt_path.xyz, r->gt_path.n);
+				    r->have_prev ? r->prev_est.R : NULL, r->gt_path.xyz, r->gt_path.n,
+				    metric ? "m" : "units, free scale");
 	if (ret)
 		LOG(ERROR, "cannot write plot %s: %s", r->o->plot, strerror(-ret));
 	return ret;

@@ -430,10 +430,11 @@ void draw_topdown(cv::Mat &canvas, const char *title, const Path &est, const dou
 		draw_title(canvas, title);
 }
 
-cv::Mat render(const char *title, const Path &est, const double *heading, const Path &gt)
+cv::Mat render(const char *title, const Path &est, const double *heading, const Path &gt,
+	       const char *unit)
 {
 	cv::Mat canvas(CANVAS_H, CANVAS_W, CV_8UC3);
-	draw_topdown(canvas, title, est, heading, gt, "m");
+	draw_topdown(canvas, title, est, heading, gt, unit);
 	return canvas;
 }
 
@@ -457,11 +458,11 @@ int write_image(const char *path, const cv::Mat &bgr)
 }
 
 int plot_topdown(const char *path, const char *title, const Path &est, const double *heading,
-		 const Path &gt)
+		 const Path &gt, const char *unit)
 {
 	if (!can_write(path))
 		return -EINVAL;
-	return write_image(path, render(title, est, heading, gt));
+	return write_image(path, render(title, est, heading, gt, unit));
 }
 
 /* --- charts: panels of x-y series --- */
@@ -651,12 +652,14 @@ bool paths_ok(const double *est_xyz, int n_est, const double *gt_xyz, int n_gt)
 } // namespace
 
 extern "C" int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz,
-				 int n_est, const double heading[9], const double *gt_xyz, int n_gt)
+				 int n_est, const double heading[9], const double *gt_xyz, int n_gt,
+				 const char *unit)
 {
-	if (!path || !paths_ok(est_xyz, n_est, gt_xyz, n_gt))
+	if (!path || !unit || !paths_ok(est_xyz, n_est, gt_xyz, n_gt))
 		return -EINVAL;
-	return mvod_guarded(
-		[&] { return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}); });
+	return mvod_guarded([&] {
+		return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}, unit);
+	});
 }
 
 extern "C" int mvod_plot_topdown_draw(struct mvod_image *out, const char *title,

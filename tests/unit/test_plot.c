@@ -129,7 +129,7 @@ static void test_circle_vs_gt(void **state)
 	join(path, sizeof(path), t->dir, "circle.png");
 
 	assert_int_equal(mvod_plot_topdown(path, "circle: estimate vs ground truth", est,
-					   N_CIRCLE, R, gt, N_CIRCLE), 0);
+					   N_CIRCLE, R, gt, N_CIRCLE, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 	assert_int_equal(count_hidden(t->dir), 0);
 }
@@ -146,7 +146,7 @@ static void test_static_point(void **state)
 	fputs("old", f);
 	fclose(f);
 
-	assert_int_equal(mvod_plot_topdown(path, "static camera", est, 1, NULL, NULL, 0), 0);
+	assert_int_equal(mvod_plot_topdown(path, "static camera", est, 1, NULL, NULL, 0, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 	assert_int_equal(count_hidden(t->dir), 0);
 }
@@ -163,18 +163,18 @@ static void test_degenerate_inputs(void **state)
 	}
 	est[3 * 2] = NAN;
 	join(path, sizeof(path), t->dir, "nan.png");
-	assert_int_equal(mvod_plot_topdown(path, "with a NaN", est, 5, NULL, NULL, 0), 0);
+	assert_int_equal(mvod_plot_topdown(path, "with a NaN", est, 5, NULL, NULL, 0, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 
 	/* Diverged values must neither hang the tick loops nor overflow the view. */
 	const double wild[9] = {-DBL_MAX, 0, DBL_MAX, INFINITY, 0, 1e300, 1.0, 0.0, 1.0};
 	const double R_nan[9] = {NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN};
 	join(path, sizeof(path), t->dir, "wild.png");
-	assert_int_equal(mvod_plot_topdown(path, "diverged", wild, 3, R_nan, wild, 3), 0);
+	assert_int_equal(mvod_plot_topdown(path, "diverged", wild, 3, R_nan, wild, 3, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 
 	join(path, sizeof(path), t->dir, "empty.png");
-	assert_int_equal(mvod_plot_topdown(path, NULL, NULL, 0, NULL, NULL, 0), 0);
+	assert_int_equal(mvod_plot_topdown(path, NULL, NULL, 0, NULL, NULL, 0, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 	assert_int_equal(count_hidden(t->dir), 0);
 }
@@ -197,7 +197,7 @@ static void test_line_and_zigzag(void **state)
 	}
 	yaw(0.1, R);
 	join(path, sizeof(path), t->dir, "line.png");
-	assert_int_equal(mvod_plot_topdown(path, "straight line", est, N, R, gt, N), 0);
+	assert_int_equal(mvod_plot_topdown(path, "straight line", est, N, R, gt, N, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 
 	for (int i = 0; i < N; i++) {
@@ -209,7 +209,7 @@ static void test_line_and_zigzag(void **state)
 	}
 	yaw(-2.0, R);
 	join(path, sizeof(path), t->dir, "zigzag.png");
-	assert_int_equal(mvod_plot_topdown(path, "zig-zag, 2000 poses", est, N, R, gt, N), 0);
+	assert_int_equal(mvod_plot_topdown(path, "zig-zag, 2000 poses", est, N, R, gt, N, "m"), 0);
 	assert_png(path, PLOT_W, PLOT_H);
 	assert_int_equal(count_hidden(t->dir), 0);
 }
@@ -220,14 +220,15 @@ static void test_bad_args(void **state)
 	const double est[3] = {0};
 	char path[128];
 	join(path, sizeof(path), t->dir, "x.png");
-	assert_int_equal(mvod_plot_topdown(path, "t", est, -1, NULL, NULL, 0), -EINVAL);
-	assert_int_equal(mvod_plot_topdown(path, "t", NULL, 3, NULL, NULL, 0), -EINVAL);
-	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, -2), -EINVAL);
-	assert_int_equal(mvod_plot_topdown(NULL, "t", est, 1, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", est, -1, NULL, NULL, 0, "m"), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", NULL, 3, NULL, NULL, 0, "m"), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, -2, "m"), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(NULL, "t", est, 1, NULL, NULL, 0, "m"), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0, NULL), -EINVAL);
 	join(path, sizeof(path), t->dir, "noext");
-	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0, "m"), -EINVAL);
 	join(path, sizeof(path), t->dir, "x.nosuchformat");
-	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0), -EINVAL);
+	assert_int_equal(mvod_plot_topdown(path, "t", est, 1, NULL, NULL, 0, "m"), -EINVAL);
 	assert_int_equal(count_hidden(t->dir), 0);
 	assert_int_equal(access(path, F_OK), -1);
 }
@@ -237,13 +238,13 @@ static void test_unwritable(void **state)
 	struct tmpdir *t = *state;
 	const double est[6] = {0, 0, 0, 1, 0, 1};
 	char path[128];
-	assert_true(mvod_plot_topdown("/nonexistent/dir/x.png", "t", est, 2, NULL, NULL, 0) < 0);
+	assert_true(mvod_plot_topdown("/nonexistent/dir/x.png", "t", est, 2, NULL, NULL, 0, "m") < 0);
 	assert_int_equal(access("/nonexistent/dir/x.png", F_OK), -1);
 
 	/* A directory where the file should go: the temp is written, rename fails, temp removed. */
 	join(path, sizeof(path), t->dir, "taken.png");
 	assert_int_equal(mkdir(path, 0700), 0);
-	assert_true(mvod_plot_topdown(path, "t", est, 2, NULL, NULL, 0) < 0);
+	assert_true(mvod_plot_topdown(path, "t", est, 2, NULL, NULL, 0, "m") < 0);
 	assert_int_equal(count_hidden(t->dir), 0);
 	rmdir(path);
 }
