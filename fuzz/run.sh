@@ -11,13 +11,13 @@ exe=$1
 regress=$2
 name=$(basename "$regress")
 corpus=corpus/$name
-mkdir -p "$corpus"
 if [ -n "${MVOD_FUZZ_SECONDS:-}" ]; then
 	budget="-max_total_time=$MVOD_FUZZ_SECONDS"
 else
-	rm -rf "$corpus" && mkdir -p "$corpus"
+	rm -rf "$corpus" # what an earlier run found would change what this one does
 	budget="-seed=1 -runs=${MVOD_FUZZ_RUNS:-50000}"
 fi
+mkdir -p "$corpus"
 # shellcheck disable=SC2086 # $budget is one or two options
 exec "$exe" $budget -timeout=10 -rss_limit_mb=4096 \
 	-error_exitcode=1 -timeout_exitcode=1 \
