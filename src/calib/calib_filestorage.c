@@ -176,10 +176,9 @@ static int read_numbers(struct fs_node data, struct fs_numbers *m)
  * twin and ROS's plain maps all have this shape. Nothing is sized from rows and cols, so a
  * file that claims a billion entries costs no more than its text.
  */
-static int read_matrix(struct fs_node root, const char *key, int *rows, int *cols, struct fs_numbers *m,
+static int read_matrix(struct fs_node node, const char *key, int *rows, int *cols, struct fs_numbers *m,
 		       char *err, size_t errlen)
 {
-	struct fs_node node = child(root, key);
 	if (!present(node))
 		return mvod_errf(err, errlen, -EINVAL, "no \"%s\" key", key);
 	if (!is_map(node) || !read_int(child(node, "rows"), INT_MIN, INT_MAX, rows) ||
@@ -235,7 +234,8 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, size_t errlen)
 {
 	/* OpenCV's stereo_calib sample writes M1 D1 M2 D2: the first camera is the one wanted. */
-	const bool stereo = !present(child(root, "camera_matrix")) && present(child(root, "M1"));
+	struct fs_node k = child(root, "camera_matrix");
+	const bool stereo = !present(k) && present(k = child(root, "M1"));
 	const char *kkey = stereo ? "M1" : "camera_matrix", *dkey = stereo ? "D1" : "distortion_coefficients";
 	int rows, cols, ret;
 	struct fs_numbers m;
@@ -243,16 +243,16 @@ static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, si
 	    (ret = read_size(root, "image_height", &c->height, err, errlen)) ||
 	    (ret = read_model(root, &c->model, err, errlen)))
 		return ret;
-	if (!present(child(root, kkey)))
+	if (!present(k))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "unknown calibration format: no \"camera_matrix\" key, so not OpenCV or ROS "
 				 "YAML (mvod also reads mvod JSON, [K, dist] JSON and KITTI calib.txt)");
-	if ((ret = read_matrix(root, kkey, &rows, &cols, &m, err, errlen)))
+	if ((ret = read_matrix(k, kkey, &rows, &cols, &m, err, errlen)))
 		return ret;
 	if (rows != 3 || cols != 3 || mvod_calib_set_K(m.v, c) != 0)
 		return mvod_errf(err, errlen, -EINVAL,
 				 "\"%s\" must be 3x3 [fx 0 cx; 0 fy cy; 0 0 1] with fx, fy > 0", kkey);
-	if ((ret = read_matrix(root, dkey, &rows, &cols, &m, err, errlen)))
+	if ((ret = read_matrix(child(root, dkey), dkey, &rows, &cols, &m, err, errlen)))
 		return ret;
 	if ((rows > 1 && cols > 1) || m.count > MVOD_MAX_DIST ||
 	    !mvod_calib_dist_count_ok(c->model, (int)m.count))
