@@ -279,7 +279,8 @@ static int yaml_error(const yaml_parser_t *p, char *err, size_t errlen)
  * The first document of the text into doc. Later documents are parsed, so that a syntax error
  * anywhere is one (as it is for OpenCV), but not read (nor are they by OpenCV).
  */
-static int load_yaml(const char *text, yaml_document_t *doc, char *err, size_t errlen)
+static int load_yaml(const char *text, size_t opencv_header_at, yaml_document_t *doc, char *err,
+		     size_t errlen)
 {
 	char *copy = strdup(text);
 	yaml_parser_t parser;
@@ -288,9 +289,8 @@ static int load_yaml(const char *text, yaml_document_t *doc, char *err, size_t e
 		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading the YAML");
 	}
 	/* OpenCV's "%YAML:1.0" is no YAML directive: as a comment, line numbers stay right. */
-	char *head = copy + strspn(copy, " \t\r\n");
-	if (strncmp(head, "%YAML:", 6) == 0)
-		*head = '#';
+	if (opencv_header_at != SIZE_MAX)
+		copy[opencv_header_at] = '#';
 	yaml_parser_set_input_string(&parser, (const unsigned char *)copy, strlen(copy));
 	int ret = yaml_parser_load(&parser, doc) ? 0 : yaml_error(&parser, err, errlen);
 	for (bool more = ret == 0 && yaml_document_get_root_node(doc); more && ret == 0;) {
@@ -339,10 +339,11 @@ int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam, enum
 				 char *err, size_t errlen)
 {
 	const char *p = text + strspn(text, " \t\r\n");
-	const bool xml = *p == '<';
+	const bool xml = *p == '<', opencv_yaml = strncmp(p, "%YAML:", 6) == 0;
 	yaml_document_t ydoc;
 	xmlDoc *xdoc = NULL;
-	int ret = xml ? load_xml(p, &xdoc, err, errlen) : load_yaml(text, &ydoc, err, errlen);
+	int ret = xml ? load_xml(p, &xdoc, err, errlen)
+		      : load_yaml(text, opencv_yaml ? (size_t)(p - text) : SIZE_MAX, &ydoc, err, errlen);
 	if (ret)
 		return ret;
 	struct fs_node root = {.doc = xml ? NULL : &ydoc};
@@ -360,6 +361,6 @@ int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam, enum
 		return ret;
 	*cam = c;
 	if (fmt)
-		*fmt = xml || strncmp(p, "%YAML:", 6) == 0 ? MVOD_CALIB_FMT_OPENCV : MVOD_CALIB_FMT_ROS;
+		*fmt = xml || opencv_yaml ? MVOD_CALIB_FMT_OPENCV : MVOD_CALIB_FMT_ROS;
 	return 0;
 }

@@ -303,9 +303,10 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 	const char *p = text + strspn(text, " \t\r\n");
 	enum mvod_calib_format f = MVOD_CALIB_FMT_KITTI;
 	char why[256] = "";
-	if (kitti_only || (*p != '{' && *p != '[' && strstr(text, "P0:")))
+	const bool json = *p == '{' || *p == '[';
+	if (kitti_only || (!json && strstr(text, "P0:")))
 		ret = kitti_camera(text, cam, why, sizeof(why));
-	else if (*p == '{' || *p == '[')
+	else if (json)
 		ret = json_any_camera(p, cam, &f, why, sizeof(why));
 	else
 		ret = mvod_calib_parse_filestorage(text, cam, &f, why, sizeof(why));
