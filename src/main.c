@@ -1,4 +1,5 @@
 /* mvod: picks the subcommand; `mvod --source ...` without one means `mvod run`. */
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -20,6 +21,12 @@ static const struct command commands[] = {
 
 int main(int argc, char **argv)
 {
+	/*
+	 * A reader that goes away (an output on a pipe or FIFO, a socket under LCM) must be a write
+	 * error the command reports, not a signal that kills it without a word; for every command.
+	 */
+	struct sigaction ign = {.sa_handler = SIG_IGN};
+	sigaction(SIGPIPE, &ign, NULL);
 	if (argc > 1 && argv[1][0] != '-') {
 		for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++) {
 			if (strcmp(argv[1], commands[i].name) == 0) {

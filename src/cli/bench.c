@@ -503,6 +503,7 @@ static void format_table(FILE *f, const struct row *rows, int n, bool csv)
 static int output_table(const struct bench *b, const struct row *rows, int n)
 {
 	int ret = 0;
+	bool stdout_failed = false;
 	for (int csv = 0; csv < 2; csv++) {
 		char *text = NULL;
 		size_t len = 0;
@@ -513,8 +514,13 @@ static int output_table(const struct bench *b, const struct row *rows, int n)
 		if (fclose(f))
 			return -ENOMEM;
 		const char *path = csv ? b->csv : b->report;
-		if (!b->quiet)
-			printf("%s%s", csv ? "\n" : "", text);
+		if (!b->quiet && !stdout_failed &&
+		    (printf("%s%s", csv ? "\n" : "", text) < 0 || fflush(stdout) != 0)) {
+			/* A closed pipe or a full disk: the table is the bench's result, so it fails. */
+			LOG(ERROR, "cannot write the table to standard output: %s", strerror(errno));
+			stdout_failed = true;
+			ret = ret ? ret : -EIO;
+		}
 		int wret = path ? mvod_write_replace(path, text, len) : 0;
 		if (wret)
 			LOG(ERROR, "cannot write %s: %s", path, strerror(-wret));

@@ -44,12 +44,6 @@ static void install_signals(void)
 	sigaction(SIGTERM, &stop, NULL);
 	struct sigaction hup = {.sa_handler = on_hup, .sa_flags = SA_RESTART};
 	sigaction(SIGHUP, &hup, NULL);
-	/*
-	 * A reader that goes away (the trajectory on a pipe or FIFO, a socket under LCM) must be a
-	 * write error mvod logs and reports as a fault, not a signal that kills it without a word.
-	 */
-	struct sigaction ign = {.sa_handler = SIG_IGN};
-	sigaction(SIGPIPE, &ign, NULL);
 }
 
 static void usage(FILE *out)

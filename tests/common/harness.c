@@ -118,12 +118,12 @@ int harness_run(char *const argv[], struct run_result *r)
 	return 0;
 }
 
-pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_path)
+/* A child running argv with stdout on the descriptor out and stderr into err_path. */
+static pid_t spawn(char *const argv[], int out, const char *err_path)
 {
 	pid_t pid = fork();
 	assert_true(pid >= 0);
 	if (pid == 0) {
-		int out = open(out_path ? out_path : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
 		int err = open(err_path ? err_path : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
 		dup2(out, 1);
 		dup2(err, 2);
@@ -131,6 +131,25 @@ pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_pa
 		_exit(127);
 	}
 	return pid;
+}
+
+pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_path)
+{
+	int out = open(out_path ? out_path : "/dev/null", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+	assert_true(out >= 0);
+	pid_t pid = spawn(argv, out, err_path);
+	close(out);
+	return pid;
+}
+
+int harness_run_reader_gone(char *const argv[], const char *err_path, int *status)
+{
+	int fds[2];
+	assert_int_equal(pipe(fds), 0);
+	close(fds[0]);
+	pid_t pid = spawn(argv, fds[1], err_path);
+	close(fds[1]);
+	return harness_wait(pid, status);
 }
 
 int harness_wait(pid_t pid, int *status)

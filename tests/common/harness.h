@@ -40,6 +40,11 @@ pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_pa
 /* Waits for pid; 1 with its exit status in *status, or 0 with the signal that killed it. */
 int harness_wait(pid_t pid, int *status);
 /*
+ * Runs argv with stdout on a pipe whose reader is closed before it starts, so every write to
+ * stdout fails with EPIPE, and stderr into err_path; returns as harness_wait.
+ */
+int harness_run_reader_gone(char *const argv[], const char *err_path, int *status);
+/*
  * Poses in a trajectory file, failing the test unless every line parses and every line is a
  * pose (no half-written line at the end).
  */

@@ -274,6 +274,27 @@ static void test_bad_usage(void **state)
 	assert_non_null(strstr(r.err, "--gt"));
 }
 
+/*
+ * The table is the bench's result: standard output on a pipe whose reader is gone is one
+ * logged error and exit 1, not a silent death by SIGPIPE, and the --csv file is still written.
+ */
+static void test_table_reader_gone(void **state)
+{
+	(void)state;
+	const char *csv = tmp_path("gone.csv"), *err_path = tmp_path("gone.err");
+	char err[8192];
+	unlink(csv);
+	char *argv[] = {(char *)harness_bin("MVOD"), "bench", "--source", video, "--calib", calib,
+			"--gt", gt_kitti, "--csv", (char *)csv, NULL};
+	int status;
+	if (!harness_run_reader_gone(argv, err_path, &status))
+		fail_msg("mvod bench killed by signal %d", status);
+	harness_read_file(err_path, err, sizeof(err));
+	if (status != 1 || count_substr(err, "cannot write the table to standard output: Broken pipe") != 1)
+		fail_msg("expected exit 1 and one 'Broken pipe' line, got %d: %s", status, err);
+	assert_int_equal(access(csv, F_OK), 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -281,6 +302,7 @@ int main(void)
 		cmocka_unit_test(test_sweep_two_configurations),
 		cmocka_unit_test(test_bad_ground_truth),
 		cmocka_unit_test(test_bad_usage),
+		cmocka_unit_test(test_table_reader_gone),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

@@ -163,22 +163,10 @@ static void test_trajectory_reader_gone(void **state)
 	char err_path[300], err[4096];
 	snprintf(err_path, sizeof(err_path), "%s/epipe.err", harness_tmpdir());
 	unlink(lcmlog);
-	int fds[2];
-	assert_int_equal(pipe(fds), 0);
-	close(fds[0]);
-	pid_t pid = fork();
-	assert_true(pid >= 0);
-	if (pid == 0) {
-		dup2(fds[1], STDOUT_FILENO);
-		if (!freopen(err_path, "w", stderr))
-			_exit(127);
-		execl(harness_bin("MVOD"), "mvod", "-q", "--source", video, "--calib", calib,
-		      "--trajectory", "/dev/stdout", "--lcm-url", url, (char *)NULL);
-		_exit(127);
-	}
-	close(fds[1]);
+	char *argv[] = {(char *)harness_bin("MVOD"), "-q", "--source", video, "--calib", calib,
+			"--trajectory", "/dev/stdout", "--lcm-url", url, NULL};
 	int status;
-	if (!harness_wait(pid, &status))
+	if (!harness_run_reader_gone(argv, err_path, &status))
 		fail_msg("mvod killed by signal %d", status);
 	harness_read_file(err_path, err, sizeof(err));
 	if (status != 1 || count(err, "Broken pipe") != 1 || count(err, "\n") != 1)
