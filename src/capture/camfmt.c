@@ -18,7 +18,7 @@
 /* Each format's name, and its fourcc in each enum mvod_camfmt_api. */
 static const struct {
 	const char *name;
-	uint32_t fourcc[2];
+	uint32_t fourcc[MVOD_CAMFMT_API_COUNT];
 } formats[MVOD_CAMFMT_COUNT] = {
 	[MVOD_CAMFMT_GREY] = {"GREY", {V4L2_PIX_FMT_GREY, FOURCC('R', '8', ' ', ' ')}},
 	[MVOD_CAMFMT_YUYV] = {"YUYV", {V4L2_PIX_FMT_YUYV, FOURCC('Y', 'U', 'Y', 'V')}},

@@ -27,6 +27,7 @@ enum mvod_camfmt {
 enum mvod_camfmt_api {
 	MVOD_CAMFMT_V4L2 = 0,      /* V4L2_PIX_FMT_*: GREY, YUYV, NV12, MJPG */
 	MVOD_CAMFMT_LIBCAMERA = 1, /* DRM fourccs: R8, YUYV, NV12, MJPG */
+	MVOD_CAMFMT_API_COUNT,
 };
 
 /* "GREY", "YUYV", "NV12", "MJPEG" (what users write in format=). */

@@ -60,8 +60,9 @@ static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct 
 	const struct mvod_image *in = &f->img;
 	size_t row = (size_t)in->w * (in->fmt == MVOD_PIX_BGR ? 3 : 1);
 	uint8_t *data = l->frame.img.data;
-	for (int y = 0; in->data != data && y < in->h; y++)
-		memcpy(data + (size_t)y * row, in->data + (size_t)y * (size_t)in->stride, row);
+	if (in->data != data) /* a camera converted straight into the letter: nothing to copy */
+		for (int y = 0; y < in->h; y++)
+			memcpy(data + (size_t)y * row, in->data + (size_t)y * (size_t)in->stride, row);
 	l->frame.img = (struct mvod_image){.w = in->w, .h = in->h, .stride = (int)row,
 					   .fmt = in->fmt, .data = data};
 	l->frame.utime = f->utime;
