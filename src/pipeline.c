@@ -563,7 +563,7 @@ static int write_plot(struct run *r)
 	bool metric = r->plot_aligned || r->o->vo.scale_mode == MVOD_SCALE_MODE_GT;
 	int ret = mvod_plot_topdown(r->o->plot, title, r->est_path.xyz, r->est_path.n,
 				    r->have_prev ? r->prev_est.R : NULL, r->gt_path.xyz, r->gt_path.n,
-				    metric ? "m" : "units, free scale");
+				    mvod_plot_unit(metric));
 	if (ret)
 		LOG(ERROR, "cannot write plot %s: %s", r->o->plot, strerror(-ret));
 	return ret;

@@ -11,13 +11,15 @@
 extern "C" {
 #endif
 
+/* The axes' unit: "m" once ground truth set the scale, "units, free scale" otherwise. */
+const char *mvod_plot_unit(bool metric);
+
 /*
  * Top-down view (x right, z forward: the ground plane of a camera frame) of an estimated path
- * against ground truth: axes in unit ("m", or "units, free scale" for a path whose scale is
- * not known) with ticks, equal aspect, start and end markers, a heading arrow at the end of the
- * estimate (from heading, the last camera-to-world rotation; may be NULL), a legend and a
- * title. gt may be NULL / n_gt 0. Written through a temporary file and rename(). Returns 0 or
- * -errno.
+ * against ground truth: axes in unit (mvod_plot_unit) with ticks, equal aspect, start and end
+ * markers, a heading arrow at the end of the estimate (from heading, the last camera-to-world
+ * rotation; may be NULL), a legend and a title. gt may be NULL / n_gt 0. Written through a
+ * temporary file and rename(). Returns 0 or -errno.
  */
 int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz, int n_est,
 		      const double heading[9], const double *gt_xyz, int n_gt, const char *unit);
@@ -29,7 +31,7 @@ int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz
 /*
  * The same picture drawn into out (MVOD_PIX_BGR, MVOD_PLOT_WIDTH x MVOD_PLOT_HEIGHT, borrowed
  * for the call) instead of a file, for a caller that draws more around it (mvod view), with
- * the axes in unit ("m", or "units, free scale" for a path whose scale is not known).
+ * the axes in unit (mvod_plot_unit).
  */
 int mvod_plot_topdown_draw(struct mvod_image *out, const char *title, const double *est_xyz,
 			   int n_est, const double heading[9], const double *gt_xyz, int n_gt,

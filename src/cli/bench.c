@@ -629,7 +629,7 @@ static int run_plots(const struct bench *b, const struct collect *c, struct whol
 		 row->f[C_DETECTOR], row->f[C_MATCHER], row->f[C_FEATURES], row->f[C_ERR_AVG],
 		 row->f[C_ATE_M]);
 	snprintf(path, sizeof(path), "%s/path-top.png", b->plots);
-	ret = plot_failed(path, mvod_plot_topdown(path, title, w->pe, w->n, heading, w->pg, w->n, "m"));
+	ret = plot_failed(path, mvod_plot_topdown(path, title, w->pe, w->n, heading, w->pg, w->n, mvod_plot_unit(true)));
 	snprintf(path, sizeof(path), "%s/path-side.png", b->plots);
 	ret = ret ? ret : plot_failed(path, plot_side(path, title, w));
 	snprintf(path, sizeof(path), "%s/errors.png", b->plots);

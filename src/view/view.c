@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "mvod/plot.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
 
@@ -92,7 +93,7 @@ double mvod_view_yaw_deg(const struct mvod_view *v)
 
 const char *mvod_view_unit(const struct mvod_view *v, bool brief)
 {
-	return v->metric ? "m" : brief ? "units" : "units, free scale";
+	return brief && !v->metric ? "units" : mvod_plot_unit(v->metric);
 }
 
 static void row(struct mvod_view_row *rows, int max_rows, int *n, const char *label,

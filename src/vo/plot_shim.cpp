@@ -651,6 +651,11 @@ bool paths_ok(const double *est_xyz, int n_est, const double *gt_xyz, int n_gt)
 
 } // namespace
 
+extern "C" const char *mvod_plot_unit(bool metric)
+{
+	return metric ? "m" : "units, free scale";
+}
+
 extern "C" int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz,
 				 int n_est, const double heading[9], const double *gt_xyz, int n_gt,
 				 const char *unit)
