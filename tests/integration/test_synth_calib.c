@@ -95,8 +95,9 @@ static void board_centre(const struct mvod_board *b, const double rvec[3], const
 	mvod_board_squares(b, &across, &down);
 	double c[3] = {across * b->square_m / 2, down * b->square_m / 2, 0}, R[9];
 	mvod_rot_exp(rvec, R);
+	mvod_mat3_vec(R, c, out);
 	for (int k = 0; k < 3; k++)
-		out[k] = R[3 * k] * c[0] + R[3 * k + 1] * c[1] + R[3 * k + 2] * c[2] + tvec[k];
+		out[k] += tvec[k];
 }
 
 static int read_poses(const char *dir, double (*pose)[6], int max)
@@ -137,7 +138,7 @@ static void views_name_their_frames(const char *dir, const char *spec, const cha
 		}
 		board_centre(&b, rv, tv, est);
 		board_centre(&b, truth[frame->valueint], truth[frame->valueint] + 3, tru);
-		worst = fmax(worst, hypot(hypot(est[0] - tru[0], est[1] - tru[1]), est[2] - tru[2]));
+		worst = fmax(worst, mvod_vec3_dist(est, tru));
 	}
 	cJSON_Delete(root);
 	print_message("views' frames: worst board centre error %.4f m\n", worst);
