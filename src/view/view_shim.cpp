@@ -124,11 +124,12 @@ int render(const struct mvod_view *v, int64_t now_us, const struct mvod_view_lab
 	   cv::Mat &canvas)
 {
 	canvas.create(CANVAS_H, CANVAS_W, CV_8UC3);
-	canvas.setTo(WHITE);
+	/* The plot paints every pixel of its part; only the panel needs a background. */
 	int ret = draw_plot(canvas, v, l->title);
 	if (ret)
 		return ret;
 	cv::Mat panel = canvas(cv::Rect(MVOD_PLOT_WIDTH, 0, PANEL_W, CANVAS_H));
+	panel.setTo(WHITE);
 	cv::line(panel, {0, MARGIN}, {0, CANVAS_H - MARGIN}, LIGHT, 1);
 	draw_rows(panel, v, now_us, draw_state(panel, v, l->banner));
 	draw_compass(panel, v);
