@@ -84,8 +84,10 @@ static struct fs_node child(struct fs_node map, const char *key)
 }
 
 /*
- * A scalar's text, malloc'ed; NULL when the node is absent or not a scalar. *plain: whether
- * it may be a number (YAML's quoted strings are not; XML has no quoting).
+ * A scalar's text, for xmlFree (libxml2 hands out XML text that way, so YAML's is allocated
+ * alike rather than copied twice); NULL when the node is absent or not a scalar. *plain:
+ * whether it may be a number (YAML's quoted strings are not; XML has no quoting). The text is
+ * at most a calibration file long (4 MiB), so its length fits an int.
  */
 static char *scalar(struct fs_node n, bool *plain)
 {
@@ -94,15 +96,12 @@ static char *scalar(struct fs_node n, bool *plain)
 		if (y->type != YAML_SCALAR_NODE || memchr(y->data.scalar.value, 0, y->data.scalar.length))
 			return NULL;
 		*plain = y->data.scalar.style == YAML_PLAIN_SCALAR_STYLE;
-		return strndup((const char *)y->data.scalar.value, y->data.scalar.length);
+		return (char *)xmlStrndup(y->data.scalar.value, (int)y->data.scalar.length);
 	}
 	if (!n.x || is_map(n))
 		return NULL;
-	xmlChar *t = xmlNodeGetContent(n.x);
-	char *s = t ? strdup((const char *)t) : NULL;
-	xmlFree(t);
 	*plain = true;
-	return s;
+	return (char *)xmlNodeGetContent(n.x);
 }
 
 /* The text with the whitespace around it, as XML may have, ignored. */
@@ -117,7 +116,7 @@ static bool read_int(struct fs_node n, long lo, long hi, int *out)
 	char *s = scalar(n, &plain), *end = s;
 	long v = s && plain ? strtol(s, &end, 10) : 0;
 	bool ok = s && end != s && all_space(end) && v >= lo && v <= hi;
-	free(s);
+	xmlFree(s);
 	if (ok)
 		*out = (int)v;
 	return ok;
@@ -167,7 +166,7 @@ static int read_numbers(struct fs_node data, struct fs_numbers *m)
 		return -EINVAL;
 	for (char *t = strtok_r(text, " \t\r\n", &save); t; t = strtok_r(NULL, " \t\r\n", &save))
 		take_number(m, t, strlen(t));
-	free(text);
+	xmlFree(text);
 	return 0;
 }
 
@@ -223,7 +222,7 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 	while (name && i < sizeof(names) / sizeof(names[0]) && strcmp(name, names[i].name) != 0)
 		i++;
 	bool known = name && i < sizeof(names) / sizeof(names[0]);
-	free(name);
+	xmlFree(name);
 	if (!known)
 		return mvod_errf(err, errlen, -EINVAL,
 				 "\"distortion_model\" must be plumb_bob, rational_polynomial, equidistant or fisheye");
