@@ -11,8 +11,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "calib/image_file.h"
 #include "mvod/calibrate.h"
+#include "util/image_file.h"
 #include "util/shim_guard.hpp"
 
 namespace {

@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "calib/image_file.h"
 #include "mvod/board.h"
 #include "mvod/log.h"
+#include "util/image_file.h"
 
 #define MM_PER_INCH 25.4
 /* Below this a printed marker's cells blur into each other, and a square's edge is jagged. */

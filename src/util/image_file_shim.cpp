@@ -1,5 +1,5 @@
 /* Image files, and PNG files that say their print resolution. */
-#include "calib/image_file.h"
+#include "util/image_file.h"
 
 #include <cerrno>
 #include <cmath>

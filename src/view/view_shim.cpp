@@ -8,9 +8,9 @@
 #include <opencv2/highgui.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "calib/image_file.h"
 #include "mvod/plot.h"
 #include "util/errbuf.h"
+#include "util/image_file.h"
 #include "util/shim_guard.hpp"
 
 namespace {

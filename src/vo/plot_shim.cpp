@@ -12,7 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "calib/image_file.h"
+#include "util/image_file.h"
 #include "util/shim_guard.hpp"
 
 namespace {

@@ -11,8 +11,8 @@
 
 #include <cmocka.h>
 
-#include "calib/image_file.h"
 #include "mvod/board.h"
+#include "util/image_file.h"
 
 static void charuco_spec_round_trips(void **state)
 {
