@@ -33,11 +33,6 @@ static char prefix[512]; /* root + the build's prefix */
 static char log_path[300], faults_log[300], traj_path[300];
 static char pkg_env[1400]; /* the environment pkg-config runs in */
 
-static const char *env(const char *name)
-{
-	return harness_bin(name);
-}
-
 /* Runs a shell command line, failing the test with its output unless it exits 0. */
 static void shell(const char *what, const char *cmd, struct run_result *r)
 {
@@ -57,8 +52,8 @@ static void run_mvod(void)
 	snprintf(log_path, sizeof(log_path), "%s/mvod.lcmlog", harness_tmpdir());
 	snprintf(traj_path, sizeof(traj_path), "%s/trajectory.tum", harness_tmpdir());
 	snprintf(url, sizeof(url), "file://%s?mode=w", log_path);
-	char *argv[] = {(char *)env("MVOD"), "--source", video, "--calib", calib, "--lcm-url", url,
-			"--trajectory", traj_path, NULL};
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", video, "--calib", calib,
+			"--lcm-url", url, "--trajectory", traj_path, NULL};
 	struct run_result r;
 	assert_int_equal(harness_run(argv, &r), 0);
 	if (!r.exited || r.status)
@@ -97,17 +92,18 @@ static int setup(void **state)
 {
 	(void)state;
 	snprintf(root, sizeof(root), "%s/root", harness_tmpdir());
-	char *install[] = {(char *)env("MESON"), "install", "-C", (char *)env("MVOD_BUILDDIR"),
-			   "--destdir", root, "--no-rebuild", "--quiet", NULL};
+	char *install[] = {(char *)harness_bin("MESON"), "install", "-C",
+			   (char *)harness_bin("MVOD_BUILDDIR"), "--destdir", root, "--no-rebuild",
+			   "--quiet", NULL};
 	struct run_result r;
 	assert_int_equal(harness_run(install, &r), 0);
 	if (!r.exited || r.status)
 		fail_msg("meson install: %s%s", r.out, r.err);
-	snprintf(prefix, sizeof(prefix), "%s%s", root, env("MVOD_PREFIX"));
+	snprintf(prefix, sizeof(prefix), "%s%s", root, harness_bin("MVOD_PREFIX"));
 	snprintf(pkg_env, sizeof(pkg_env),
 		 "PKG_CONFIG_PATH=%s/%s/pkgconfig PKG_CONFIG_SYSROOT_DIR=%s "
 		 "LD_LIBRARY_PATH=%s/%s",
-		 prefix, env("MVOD_LIBDIR"), root, prefix, env("MVOD_LIBDIR"));
+		 prefix, harness_bin("MVOD_LIBDIR"), root, prefix, harness_bin("MVOD_LIBDIR"));
 	run_mvod();
 	write_fault_log();
 	return 0;
@@ -125,7 +121,7 @@ static void test_pkg_config_points_into_destdir(void **state)
 	snprintf(want, sizeof(want), "-I%s/include/mvod-lcmtypes", prefix);
 	if (!strstr(r.out, want) || !strstr(r.out, "-lmvod-lcmtypes") || !strstr(r.out, "-llcm"))
 		fail_msg("pkg-config says \"%s\", wants %s, -lmvod-lcmtypes, -llcm", r.out, want);
-	if (strstr(r.out, env("MVOD_BUILDDIR")))
+	if (strstr(r.out, harness_bin("MVOD_BUILDDIR")))
 		fail_msg("pkg-config names the build tree: %s", r.out);
 }
 
@@ -135,7 +131,7 @@ static void test_fingerprints(void **state)
 	(void)state;
 	char path[700], text[1024];
 	snprintf(path, sizeof(path), "%s/%s/mvod/lcmtypes/fingerprints.txt", prefix,
-		 env("MVOD_DATADIR"));
+		 harness_bin("MVOD_DATADIR"));
 	harness_read_file(path, text, sizeof(text));
 	lcm_eventlog_t *ev = lcm_eventlog_create(log_path, "r");
 	assert_non_null(ev);
@@ -194,7 +190,7 @@ static void expected_lines(char *buf, size_t len)
 	assert_true(n < len);
 }
 
-/* Lines of text starting with prefix, in order. */
+/* The lines of text that begin with start, in order, into out. */
 static void only_lines(const char *text, const char *start, char *out, size_t len)
 {
 	size_t n = 0;
@@ -270,39 +266,37 @@ static void check_subscriber(const char *program)
 	assert_string_equal(out, fault_lines);
 }
 
-/* Builds an installed example with the compiler and flags given, against mvod-lcmtypes.pc. */
-static void build_example(const char *compiler, const char *flags, const char *source,
-			  const char *exe)
+/*
+ * Builds an installed example with the compiler and flags given, against mvod-lcmtypes.pc
+ * only, and checks what it prints.
+ */
+static void check_example(const char *compiler, const char *flags, const char *source)
 {
-	char cmd[4096], san[128] = "";
-	const char *sanitize = env("MVOD_SANITIZE");
+	char cmd[4096], san[128] = "", program[300];
+	const char *sanitize = harness_bin("MVOD_SANITIZE");
 	if (strcmp(sanitize, "none") != 0) /* the installed library was built with it */
 		snprintf(san, sizeof(san), "-fsanitize=%s", sanitize);
+	snprintf(program, sizeof(program), "%s/%s.exe", harness_tmpdir(), source);
 	snprintf(cmd, sizeof(cmd),
 		 "export %s; %s %s %s -Wall -Wextra -Wno-unused-parameter -Werror "
-		 "%s/%s/mvod/examples/%s $(pkg-config --cflags --libs mvod-lcmtypes) -o %s/%s",
-		 pkg_env, env(compiler), flags, san, prefix, env("MVOD_DATADIR"), source,
-		 harness_tmpdir(), exe);
+		 "%s/%s/mvod/examples/%s $(pkg-config --cflags --libs mvod-lcmtypes) -o %s",
+		 pkg_env, harness_bin(compiler), flags, san, prefix, harness_bin("MVOD_DATADIR"),
+		 source, program);
 	struct run_result r;
 	shell(source, cmd, &r);
+	check_subscriber(program);
 }
 
 static void test_c_example(void **state)
 {
 	(void)state;
-	build_example("MVOD_CC", "-std=c11", "subscribe.c", "subscribe-c");
-	char program[300];
-	snprintf(program, sizeof(program), "%s/subscribe-c", harness_tmpdir());
-	check_subscriber(program);
+	check_example("MVOD_CC", "-std=c11", "subscribe.c");
 }
 
 static void test_cpp_example(void **state)
 {
 	(void)state;
-	build_example("MVOD_CXX", "-std=c++11", "subscribe.cpp", "subscribe-cpp");
-	char program[300];
-	snprintf(program, sizeof(program), "%s/subscribe-cpp", harness_tmpdir());
-	check_subscriber(program);
+	check_example("MVOD_CXX", "-std=c++11", "subscribe.cpp");
 }
 
 /* The package from pkg-config's pythondir (which pkgconf prefixes with the sysroot too). */
@@ -313,7 +307,7 @@ static void test_python_example(void **state)
 	snprintf(program, sizeof(program),
 		 "PYTHONPATH=$(pkg-config --variable=pythondir mvod-lcmtypes) python3 "
 		 "%s/%s/mvod/examples/subscribe.py",
-		 prefix, env("MVOD_DATADIR"));
+		 prefix, harness_bin("MVOD_DATADIR"));
 	check_subscriber(program);
 }
 
