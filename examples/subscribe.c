@@ -34,7 +34,8 @@ static const struct {
 
 static void print_state(int8_t state)
 {
-	if (state >= 0 && state < (int)(sizeof(state_names) / sizeof(state_names[0])))
+	if (state >= 0 && state < (int)(sizeof(state_names) / sizeof(state_names[0])) &&
+	    state_names[state])
 		printf("state=%s", state_names[state]);
 	else
 		printf("state=%d", state); /* a state newer than these bindings */
