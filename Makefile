@@ -107,13 +107,18 @@ demo: build
 bench: build
 	bench/run.sh $(BUILDDIR)
 
-# The binaries, LCM types, the systemd unit with its sysusers and tmpfiles entries (under
+# The binaries, LCM types and their bindings for subscribers (libmvod-lcmtypes, headers,
+# mvod-lcmtypes.pc, Python), the systemd unit with its sysusers and tmpfiles entries (under
 # PREFIX/lib), the example config (PREFIX/share/mvod/mvod.conf.example), and that example as
-# /etc/mvod/mvod.conf when there is none yet: an edited config is never overwritten.
+# /etc/mvod/mvod.conf when there is none yet: an edited config is never overwritten. Meson 1.0
+# does not run ldconfig, without which programs do not find the new library.
 install: build
 	meson configure $(BUILDDIR) --prefix=$(PREFIX)
 	meson compile -C $(BUILDDIR)
 	DESTDIR=$(DESTDIR) meson install -C $(BUILDDIR) --no-rebuild
+	@if [ -z "$(DESTDIR)" ] && ! ldconfig 2>/dev/null; then \
+		echo "make install: run ldconfig as root, so programs find libmvod-lcmtypes.so.1"; \
+	fi
 	@if [ ! -e $(DESTDIR)/etc/mvod/mvod.conf ]; then \
 		install -D -m 644 systemd/mvod.conf $(DESTDIR)/etc/mvod/mvod.conf && \
 		echo "make install: wrote $(DESTDIR)/etc/mvod/mvod.conf: set [source] and [calibration]"; \

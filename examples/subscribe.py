@@ -1,0 +1,67 @@
+#!/usr/bin/env python3
+"""A Python subscriber to mvod: prints every pose on MVOD_POSE and every status on MVOD_STATUS.
+
+  PYTHONPATH=$(pkg-config --variable=pythondir mvod-lcmtypes) \\
+      python3 subscribe.py 'file:///tmp/run.lcmlog?mode=r&speed=0'  # a log of a run; ends with it
+  ... python3 subscribe.py URL                 # beside a running mvod: the URL of its --lcm-url
+
+Needs LCM's Python module (pip install lcm) and mvod's generated package (import mvod).
+"""
+import sys
+
+import lcm
+from mvod import pose_t, status_t
+
+STATE_NAMES = {getattr(pose_t, n): n[len("STATE_"):] for n in dir(pose_t) if n.startswith("STATE_")}
+FAULT_BITS = sorted((getattr(status_t, n), n[len("FAULT_"):])
+                    for n in dir(status_t) if n.startswith("FAULT_"))
+
+
+def state_name(state):
+    return STATE_NAMES.get(state, str(state))  # a number: a state newer than these bindings
+
+
+def fault_names(faults):
+    """Fault bits as names joined by '|', bits newer than these bindings in hex; 'none' for 0."""
+    names = [name for bit, name in FAULT_BITS if faults & bit]
+    unknown = faults & ~sum(bit for bit, _ in FAULT_BITS)
+    if unknown:
+        names.append("0x%x" % (unknown & 0xFFFFFFFF))
+    return "|".join(names) or "none"
+
+
+def on_pose(channel, data):
+    p = pose_t.decode(data)
+    print("pose frame=%d utime=%d position=%.6f,%.6f,%.6f orientation=%.6f,%.6f,%.6f,%.6f state=%s"
+          % ((p.frame, p.utime) + tuple(p.position) + tuple(p.orientation)
+             + (state_name(p.state),)), flush=True)
+
+
+def on_status(channel, data):
+    s = status_t.decode(data)
+    print("status utime=%d frames=%d state=%s faults=%s"
+          % (s.utime, s.frames, state_name(s.state), fault_names(s.faults)), flush=True)
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit("usage: %s LCM_URL (mvod's --lcm-url, or a file:// log with ?mode=r&speed=0)"
+                 % sys.argv[0])
+    url = sys.argv[1]
+    try:
+        lc = lcm.LCM(url)
+    except RuntimeError:
+        sys.exit("%s: LCM cannot open %s" % (sys.argv[0], url))
+    lc.subscribe("MVOD_POSE", on_pose)
+    lc.subscribe("MVOD_STATUS", on_status)
+    try:
+        while True:
+            lc.handle()
+    except OSError:  # LCM's file provider reports the end of a log as an error
+        sys.exit(0 if url.startswith("file://") else 1)
+    except KeyboardInterrupt:
+        pass
+
+
+if __name__ == "__main__":
+    main()
