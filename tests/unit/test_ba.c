@@ -204,9 +204,9 @@ static void test_kitti_sized_window(void **state)
 	struct mvod_ba_problem p = problem();
 	struct mvod_ba_result r;
 	struct timespec t0, t1;
-	clock_gettime(CLOCK_MONOTONIC, &t0);
+	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
 	assert_int_equal(mvod_ba_solve(*state, &p, &o, &r), 0);
-	clock_gettime(CLOCK_MONOTONIC, &t1);
+	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
 	double ms = (t1.tv_sec - t0.tv_sec) * 1e3 + (t1.tv_nsec - t0.tv_nsec) / 1e6;
 	print_message("BA %d poses, %d points, %d observations: %d iterations, %.1f ms\n", POSES,
 		      win.n_pts, win.n_obs, r.iterations, ms);
