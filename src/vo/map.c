@@ -1,5 +1,7 @@
 #include "map.h"
 
+#include "match.h"
+
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +21,7 @@ struct mvod_map {
 	int *free_slots;              /* [point_cap] stack of free point slots */
 	int n_free;
 	uint8_t *mark;                /* [point_cap] scratch of mvod_map_check */
+	int *dist;                    /* [kf_cap * kf_cap] scratch of mvod_map_update_desc */
 };
 
 void mvod_map_params_default(struct mvod_map_params *p)
@@ -95,8 +98,9 @@ int mvod_map_create(struct mvod_map **out, const struct mvod_map_params *p)
 	m->pt_gen = calloc(npt, sizeof(*m->pt_gen));
 	m->free_slots = calloc(npt, sizeof(*m->free_slots));
 	m->mark = calloc(npt, 1);
+	m->dist = calloc((size_t)p->kf_cap * p->kf_cap, sizeof(*m->dist));
 	if (!m->kf || !m->kf_gen || !m->kp_pool || !m->desc_pool || !m->ptid_pool || !m->pt ||
-	    !m->obs_pool || !m->pt_gen || !m->free_slots || !m->mark) {
+	    !m->obs_pool || !m->pt_gen || !m->free_slots || !m->mark || !m->dist) {
 		mvod_map_destroy(m);
 		return -ENOMEM;
 	}
@@ -119,6 +123,7 @@ void mvod_map_destroy(struct mvod_map *m)
 	free(m->pt_gen);
 	free(m->free_slots);
 	free(m->mark);
+	free(m->dist);
 	free(m);
 }
 
@@ -272,6 +277,46 @@ int mvod_map_set_point(struct mvod_map *m, mvod_map_id id, const double pos[3])
 	if (!pt)
 		return -ENOENT;
 	memcpy(pt->pos, pos, sizeof(pt->pos));
+	return 0;
+}
+
+static const uint8_t *obs_desc(const struct mvod_map *m, const struct mvod_map_obs *o)
+{
+	return kf_get(m, o->kf)->desc + (size_t)o->kp * MVOD_MAP_DESC_BYTES;
+}
+
+/* Median of row i of the n x n distance table (n <= kf_cap: a partial selection sort). */
+static int row_median(int *row, int n)
+{
+	for (int a = 0; a <= n / 2; a++)
+		for (int b = a + 1; b < n; b++)
+			if (row[b] < row[a]) {
+				int x = row[a];
+				row[a] = row[b];
+				row[b] = x;
+			}
+	return row[n / 2];
+}
+
+int mvod_map_update_desc(struct mvod_map *m, mvod_map_id id)
+{
+	struct mvod_map_point *pt = pt_get(m, id);
+	if (!pt)
+		return -ENOENT;
+	int n = pt->n_obs, best = -1, best_med = 0;
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++)
+			m->dist[i * n + j] = mvod_hamming256(obs_desc(m, &pt->obs[i]),
+							     obs_desc(m, &pt->obs[j]));
+	for (int i = 0; i < n; i++) {
+		int med = row_median(m->dist + i * n, n);
+		if (best < 0 || med < best_med) {
+			best = i;
+			best_med = med;
+		}
+	}
+	if (best >= 0)
+		memcpy(pt->desc, obs_desc(m, &pt->obs[best]), MVOD_MAP_DESC_BYTES);
 	return 0;
 }
 

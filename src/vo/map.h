@@ -127,11 +127,21 @@ int mvod_map_add_point(struct mvod_map *m, const double pos[3],
 		       const uint8_t desc[MVOD_MAP_DESC_BYTES], mvod_map_id kf, mvod_map_id *out);
 const struct mvod_map_point *mvod_map_point(const struct mvod_map *m, mvod_map_id id);
 int mvod_map_set_point(struct mvod_map *m, mvod_map_id pt, const double pos[3]);
+/*
+ * Sets the point's descriptor to that of its observation with the least median Hamming
+ * distance to the others (ORB-SLAM's ComputeDistinctiveDescriptors), after observations
+ * change. Unchanged without observations.
+ */
+int mvod_map_update_desc(struct mvod_map *m, mvod_map_id pt);
 /* visible += n_visible, found += n_found (Tracking's IncreaseVisible / IncreaseFound). */
 int mvod_map_count(struct mvod_map *m, mvod_map_id pt, int n_visible, int n_found);
 /* Removes the point and all its observations; its slot becomes free (its id stale). */
 int mvod_map_erase_point(struct mvod_map *m, mvod_map_id pt);
-/* Live points, in slot order; returns how many (<= cap). */
+/*
+ * Live points in slot order; returns how many (<= cap). These are the window's points: every
+ * observation is from a keyframe in the ring (those of evicted keyframes are removed), so only
+ * a point just added and not yet observed has none.
+ */
 int mvod_map_points(const struct mvod_map *m, mvod_map_id *ids, int cap);
 int mvod_map_n_points(const struct mvod_map *m);
 

@@ -234,6 +234,30 @@ static void test_culling(void **state)
 	mvod_map_destroy(m);
 }
 
+static void test_representative_descriptor(void **state)
+{
+	(void)state;
+	struct mvod_map *m = new_map(4, 8);
+	/* Keypoint 0 of three keyframes: A, A with one bit flipped, and B far from both. */
+	mvod_map_id k[3];
+	for (int i = 0; i < 3; i++) {
+		memset(descs, i == 2 ? 0xff : 0x00, MVOD_MAP_DESC_BYTES);
+		descs[0] = i == 1 ? 0x01 : descs[0];
+		k[i] = add_kf(m, NULL);
+	}
+	mvod_map_id a = add_pt(m, k[0]);
+	for (int i = 2; i >= 0; i--) /* B first, so the choice is not the first observation */
+		assert_int_equal(mvod_map_add_obs(m, a, k[i], 0), 0);
+	assert_int_equal(mvod_map_update_desc(m, a), 0);
+	/* Medians: A 1, A' 1, B 255: one of the A pair (the first of them in the list, A'). */
+	const uint8_t *d = mvod_map_point(m, a)->desc;
+	assert_int_equal(d[0], 0x01);
+	for (int b = 1; b < MVOD_MAP_DESC_BYTES; b++)
+		assert_int_equal(d[b], 0);
+	memset(descs, 0, sizeof(descs));
+	mvod_map_destroy(m);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -244,6 +268,7 @@ int main(void)
 		cmocka_unit_test(test_checker_notices),
 		cmocka_unit_test(test_eviction),
 		cmocka_unit_test(test_culling),
+		cmocka_unit_test(test_representative_descriptor),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
