@@ -71,12 +71,12 @@ static int flags_of(enum mvod_pnp_method m)
 
 /* Re-selects inliers: squared reprojection error in sigma units within thresh^2, in front. */
 static int classify(const struct mvod_pnp *pnp, const double *X, const double *uv,
-		    const double *sigma, int n, const double K[4], uint8_t *inlier)
+		    const double *sigma, int n, const double K[4], double gate_px, uint8_t *inlier)
 {
 	cv::Matx33d R;
 	cv::Rodrigues(pnp->rvec, R);
 	const double *t = pnp->tvec.ptr<double>();
-	double gate = pnp->p.thresh_px * pnp->p.thresh_px;
+	double gate = gate_px * gate_px;
 	int k = 0;
 	for (int i = 0; i < n; i++) {
 		cv::Vec3d c = R * cv::Vec3d(X[3 * i], X[3 * i + 1], X[3 * i + 2]);
@@ -106,6 +106,23 @@ static void refine(struct mvod_pnp *pnp, const double *X, const double *uv, int 
 			     cv::noArray(), pnp->rvec, pnp->tvec);
 }
 
+/* Refinement rounds from the current pose and inliers (k of them), then the result out. */
+static int rounds(struct mvod_pnp *pnp, const double *X, const double *uv, const double *sigma,
+		  int n, const double K4[4], int k, double R[9], double t[3], uint8_t *inlier)
+{
+	const cv::Matx33d K(K4[0], 0, K4[2], 0, K4[1], K4[3], 0, 0, 1);
+	for (int r = 0; r < pnp->p.refine_rounds && k >= 4; r++) {
+		refine(pnp, X, uv, n, K, inlier);
+		k = classify(pnp, X, uv, sigma, n, K4, pnp->p.thresh_px, inlier);
+	}
+	if (k < pnp->p.min_inliers || k < 4)
+		return -ENODATA;
+	cv::Mat Rm(3, 3, CV_64F, R);
+	cv::Rodrigues(pnp->rvec, Rm);
+	std::copy(pnp->tvec.ptr<double>(), pnp->tvec.ptr<double>() + 3, t);
+	return k;
+}
+
 extern "C" int mvod_pnp_solve(struct mvod_pnp *pnp, const double *X, const double *uv,
 			      const double *sigma, int n, const double K4[4], double R[9],
 			      double t[3], uint8_t *inlier)
@@ -125,15 +142,20 @@ extern "C" int mvod_pnp_solve(struct mvod_pnp *pnp, const double *X, const doubl
 		std::fill(inlier, inlier + n, 0);
 		for (int j = 0; j < k; j++)
 			inlier[pnp->inliers.at<int>(j)] = 1;
-		for (int r = 0; r < p.refine_rounds && k >= 4; r++) {
-			refine(pnp, X, uv, n, K, inlier);
-			k = classify(pnp, X, uv, sigma, n, K4, inlier);
-		}
-		if (k < p.min_inliers || k < 4)
-			return -ENODATA;
-		cv::Mat Rm(3, 3, CV_64F, R);
-		cv::Rodrigues(pnp->rvec, Rm);
-		std::copy(pnp->tvec.ptr<double>(), pnp->tvec.ptr<double>() + 3, t);
-		return k;
+		return rounds(pnp, X, uv, sigma, n, K4, k, R, t, inlier);
+	});
+}
+
+extern "C" int mvod_pnp_refine(struct mvod_pnp *pnp, const double *X, const double *uv,
+			       const double *sigma, int n, const double K4[4], double R[9],
+			       double t[3], uint8_t *inlier)
+{
+	return mvod_guarded([&] {
+		if (n < 4 || n > pnp->cap)
+			return -EINVAL;
+		cv::Rodrigues(cv::Mat(3, 3, CV_64F, R), pnp->rvec);
+		std::copy(t, t + 3, pnp->tvec.ptr<double>());
+		int k = classify(pnp, X, uv, sigma, n, K4, 4 * pnp->p.thresh_px, inlier);
+		return rounds(pnp, X, uv, sigma, n, K4, k, R, t, inlier);
 	});
 }

@@ -55,6 +55,16 @@ int mvod_pnp_solve(struct mvod_pnp *pnp, const double *X, const double *uv,
 		   const double *sigma, int n, const double K[4], double R[9], double t[3],
 		   uint8_t *inlier);
 
+/*
+ * Pose-only refinement from a predicted pose (R, t in and out), without RANSAC: what tracking
+ * with a constant-velocity prediction needs per frame (ORB-SLAM's TrackWithMotionModel does no
+ * RANSAC either). The first round gates at 4 x thresh_px around the prediction (it may be a
+ * few pixels off), the next refine_rounds at thresh_px. Same returns as mvod_pnp_solve.
+ */
+int mvod_pnp_refine(struct mvod_pnp *pnp, const double *X, const double *uv,
+		    const double *sigma, int n, const double K[4], double R[9], double t[3],
+		    uint8_t *inlier);
+
 #ifdef __cplusplus
 }
 #endif

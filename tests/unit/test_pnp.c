@@ -67,6 +67,21 @@ static void pose_error(const struct matches *m, const double R[9], const double 
 
 static struct matches mt;
 
+/*
+ * No wrong match is kept (one lands within 2.45 sigma of its truth with probability 6e-5);
+ * the chi2 gate at 95 % keeps at least 90 % of the right ones; k counts the flags.
+ */
+static void check_flags(int k)
+{
+	int kept_right = 0;
+	for (int i = 0; i < N; i++) {
+		assert_false(mt.outlier[i] && mt.inlier[i]);
+		kept_right += !mt.outlier[i] && mt.inlier[i];
+	}
+	assert_int_equal(k, kept_right);
+	assert_true(kept_right >= 0.9 * 0.7 * N);
+}
+
 static void test_pose_and_inliers(void **state)
 {
 	(void)state;
@@ -88,15 +103,32 @@ static void test_pose_and_inliers(void **state)
 	 */
 	assert_true(e_rot < 3e-3);
 	assert_true(e_t < 0.05);
-	/* No wrong match is kept (one lands within 2.45 sigma of its truth with probability
-	 * 6e-5); the chi2 gate at 95 % keeps at least 90 % of the right ones. */
-	int kept_right = 0;
-	for (int i = 0; i < N; i++) {
-		assert_false(mt.outlier[i] && mt.inlier[i]);
-		kept_right += !mt.outlier[i] && mt.inlier[i];
-	}
-	assert_int_equal(k, kept_right);
-	assert_true(kept_right >= 0.9 * 0.7 * N);
+	check_flags(k);
+	mvod_pnp_destroy(pnp);
+}
+
+/* Per-frame tracking: refinement alone from a prediction 0.005 rad and 0.1 units off (a
+ * change of speed of a tenth of a step), same matches with 30 % outliers. */
+static void test_refine_from_prediction(void **state)
+{
+	(void)state;
+	struct mvod_pnp_params p;
+	mvod_pnp_params_default(&p);
+	p.refine_rounds = 3;
+	struct mvod_pnp *pnp = NULL;
+	assert_int_equal(mvod_pnp_create(&p, N, &pnp), 0);
+	make_matches(&mt, 1);
+	double w[3] = {mt.pose[0] + 0.005, mt.pose[1], mt.pose[2]}, R[9], t[3], e_rot, e_t;
+	mvod_rot_exp(w, R);
+	t[0] = mt.pose[3] + 0.1, t[1] = mt.pose[4], t[2] = mt.pose[5] - 0.1;
+	int k = mvod_pnp_refine(pnp, mt.X, mt.uv, mt.sigma, N, K, R, t, mt.inlier);
+	pose_error(&mt, R, t, &e_rot, &e_t);
+	print_message("refine: %d inliers, rotation error %.2g rad, translation %.2g\n", k, e_rot,
+		      e_t);
+	/* The same bounds and flags as RANSAC's in test_pose_and_inliers, for the same reasons. */
+	assert_true(e_rot < 3e-3);
+	assert_true(e_t < 0.05);
+	check_flags(k);
 	mvod_pnp_destroy(pnp);
 }
 
@@ -162,6 +194,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_pose_and_inliers),
+		cmocka_unit_test(test_refine_from_prediction),
 		cmocka_unit_test(test_bad_input),
 		cmocka_unit_test(test_compare_methods),
 	};
