@@ -57,6 +57,12 @@ extern "C" void mvod_pnp_destroy(struct mvod_pnp *pnp)
 	delete pnp;
 }
 
+/* Camera matrix of fx, fy, cx, cy. */
+static cv::Matx33d K_of(const double K4[4])
+{
+	return cv::Matx33d(K4[0], 0, K4[2], 0, K4[1], K4[3], 0, 0, 1);
+}
+
 /* OpenCV's flags for a method: the PnP solver and, for the USAC ones, the USAC variant. */
 static int flags_of(enum mvod_pnp_method m)
 {
@@ -110,7 +116,7 @@ static void refine(struct mvod_pnp *pnp, const double *X, const double *uv, int 
 static int rounds(struct mvod_pnp *pnp, const double *X, const double *uv, const double *sigma,
 		  int n, const double K4[4], int k, double R[9], double t[3], uint8_t *inlier)
 {
-	const cv::Matx33d K(K4[0], 0, K4[2], 0, K4[1], K4[3], 0, 0, 1);
+	const cv::Matx33d K = K_of(K4);
 	for (int r = 0; r < pnp->p.refine_rounds && k >= 4; r++) {
 		refine(pnp, X, uv, n, K, inlier);
 		k = classify(pnp, X, uv, sigma, n, K4, pnp->p.thresh_px, inlier);
@@ -130,7 +136,7 @@ extern "C" int mvod_pnp_solve(struct mvod_pnp *pnp, const double *X, const doubl
 	return mvod_guarded([&] {
 		if (n < 4 || n > pnp->cap)
 			return -EINVAL;
-		const cv::Matx33d K(K4[0], 0, K4[2], 0, K4[1], K4[3], 0, 0, 1);
+		const cv::Matx33d K = K_of(K4);
 		const cv::Mat Xm(n, 3, CV_64F, const_cast<double *>(X));
 		const cv::Mat uvm(n, 2, CV_64F, const_cast<double *>(uv));
 		const struct mvod_pnp_params &p = pnp->p;
