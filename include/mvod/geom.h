@@ -38,6 +38,8 @@ void mvod_quat_to_rot(const double q[4], double R[9]);
 double mvod_rot_angle(const double R[9]);
 /* R = exp([w]x), axis-angle vector w in radians (Rodrigues). */
 void mvod_rot_exp(const double w[3], double R[9]);
+/* Its inverse: the axis-angle vector (radians, |w| <= pi) of a rotation matrix. */
+void mvod_rot_log(const double R[9], double w[3]);
 /* Angle between two vectors in radians; 0 when either is zero. */
 double mvod_vec3_angle(const double a[3], const double b[3]);
 

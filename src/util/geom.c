@@ -177,6 +177,17 @@ void mvod_rot_exp(const double w[3], double R[9])
 	R[8] = c + k[2] * k[2] * v;
 }
 
+void mvod_rot_log(const double R[9], double w[3])
+{
+	/* Through the quaternion (w >= 0): atan2 stays exact near 0 and near pi. */
+	double q[4];
+	mvod_rot_to_quat(R, q);
+	double n = sqrt(q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+	double f = n < 1e-15 ? 2.0 : 2.0 * atan2(n, q[0]) / n;
+	for (int k = 0; k < 3; k++)
+		w[k] = f * q[k + 1];
+}
+
 double mvod_vec3_angle(const double a[3], const double b[3])
 {
 	double na = mvod_vec3_norm(a), nb = mvod_vec3_norm(b);

@@ -7,6 +7,8 @@
 #define MVOD_MATCH_H
 
 #include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
 
 #include "cv_shim.h"
 #include "mvod/vo.h"
@@ -17,6 +19,20 @@ struct mvod_match_params {
 	double ratio;                /* ratio test threshold for kinds with one; >= 1 = off */
 	int best_n;                  /* BF_CROSS: matches kept, the closest first; 0 = all */
 };
+
+/*
+ * Hamming distance in bits of two ORB descriptors (MVOD_ORB_DESC_BYTES = 32 bytes each, any
+ * alignment: memcpy compiles to plain loads). Inline because it is the inner loop of the
+ * distance table and of matching by projection (project_match.c).
+ */
+static inline int mvod_hamming256(const uint8_t *a, const uint8_t *b)
+{
+	uint64_t x[4], y[4];
+	memcpy(x, a, sizeof(x));
+	memcpy(y, b, sizeof(y));
+	return __builtin_popcountll(x[0] ^ y[0]) + __builtin_popcountll(x[1] ^ y[1]) +
+	       __builtin_popcountll(x[2] ^ y[2]) + __builtin_popcountll(x[3] ^ y[3]);
+}
 
 struct mvod_matcher;
 

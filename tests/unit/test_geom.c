@@ -34,6 +34,13 @@ static void test_quat_round_trip(void **state)
 			mvod_quat_to_rot(q, R2);
 			assert_mat_near(R, R2, 9, 1e-9);
 			assert_true(fabs(mvod_rot_angle(R) - angles[k]) < 1e-7);
+			/* The log gives w back (at exactly pi, -w is as right: same rotation). */
+			double w2[3], R3[9];
+			mvod_rot_log(R, w2);
+			mvod_rot_exp(w2, R3);
+			assert_mat_near(R, R3, 9, 1e-9);
+			if (angles[k] < 3.1)
+				assert_mat_near(w, w2, 3, 1e-9);
 		}
 	}
 }
