@@ -24,6 +24,17 @@
 
 static char tmpdir[64];
 
+/*
+ * MVOD_TEST_FILTER=PATTERN (cmocka's * and ? wildcards) runs only the matching test cases of
+ * every test binary, before main: how make mutate runs one case of a long integration test.
+ */
+__attribute__((constructor)) static void filter_from_env(void)
+{
+	const char *pattern = getenv("MVOD_TEST_FILTER");
+	if (pattern && *pattern)
+		cmocka_set_test_filter(pattern);
+}
+
 const char *harness_bin(const char *env)
 {
 	const char *p = getenv(env);

@@ -150,16 +150,22 @@ static int expect_tracking(const struct run *r, int first, int last)
 	return structure;
 }
 
+/* mvod on a 320x240 video of an mvod-synth path; its poses checked against its trajectory. */
+static void run_path(const char *path, int frames, struct run *r)
+{
+	char dir[300], src[320];
+	snprintf(dir, sizeof(dir), "%s/%s", harness_tmpdir(), path);
+	harness_synth(dir, path, frames, "mkv", "--size", "320x240", NULL);
+	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
+	run_mvod(dir, src, r);
+	poses_match_trajectory(r, frames);
+}
+
 static void test_forward(void **state)
 {
 	(void)state;
-	char dir[300], src[320];
-	snprintf(dir, sizeof(dir), "%s/forward", harness_tmpdir());
-	harness_synth(dir, "forward", 30, "mkv", "--size", "320x240", NULL);
-	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
 	struct run r;
-	run_mvod(dir, src, &r);
-	poses_match_trajectory(&r, 30);
+	run_path("forward", 30, &r);
 	/*
 	 * Structure scales most steps: measured 14 of the 17 motion frames after the first (the
 	 * rest fall back to constant speed); fewer than 6 means the structure is not being used.
@@ -175,13 +181,8 @@ static void test_forward(void **state)
 static void test_static(void **state)
 {
 	(void)state;
-	char dir[300], src[320];
-	snprintf(dir, sizeof(dir), "%s/static", harness_tmpdir());
-	harness_synth(dir, "static", 10, "mkv", "--size", "320x240", NULL);
-	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
 	struct run r;
-	run_mvod(dir, src, &r);
-	poses_match_trajectory(&r, 10);
+	run_path("static", 10, &r);
 	expect_pose(&r, 0, MVOD_POSE_T_FRAME_FIRST, MVOD_POSE_T_STATE_INITIALIZING,
 		    MVOD_POSE_T_SCALE_NONE);
 	for (int i = 1; i < 10; i++) {

@@ -73,9 +73,10 @@ def parse(path):
             if key == "id":
                 cur = {"id": value, "line": no}
                 muts.append(cur)
-            elif cur is None or key not in ("title", "module", "file", "find", "replace", "tests"):
+            elif cur is None or key not in ("title", "module", "file", "find", "replace", "tests",
+                                            "filter"):
                 sys.exit(f"{path}:{no}: unknown key {key!r} (id, title, module, file, find, "
-                         "replace, tests)")
+                         "replace, tests, filter)")
             elif key in ("find", "replace"):
                 cur.setdefault(key, []).append(unescape(value))
             elif key == "tests":
@@ -141,12 +142,15 @@ def env():
     return e
 
 
-def run(cmd, log, **kw):
+def run(cmd, log, extra_env=None):
     """Runs cmd with its output appended to log; its exit status."""
+    e = env()
+    e.update(extra_env or {})
     with open(log, "a") as f:
-        f.write("$ " + " ".join(cmd) + "\n")
+        f.write("$ " + " ".join(f"{k}={v}" for k, v in (extra_env or {}).items()) +
+                " ".join(cmd) + "\n")
         f.flush()
-        return subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env=env(), **kw).returncode
+        return subprocess.run(cmd, stdout=f, stderr=subprocess.STDOUT, env=e).returncode
 
 
 def setup(log):
@@ -180,10 +184,13 @@ def build(targets, log):
     return run(["ninja", "-C", BUILD] + targets, log) == 0
 
 
-def test(tests, log):
-    """True when every named test passes (a skip counts as a pass, as in make test)."""
+def test(tests, filt, log):
+    """True when every named test passes (a skip counts as a pass, as in make test). filt, if
+    not None, is a cmocka pattern: only the matching cases of each test run (MVOD_TEST_FILTER,
+    read by tests/common/harness.c)."""
+    extra = {"MVOD_TEST_FILTER": filt} if filt else {}
     return run(["meson", "test", "-C", BUILD, "--no-rebuild", "--print-errorlogs",
-                "--timeout-multiplier", TIMEOUT_MULTIPLIER] + tests, log) == 0
+                "--timeout-multiplier", TIMEOUT_MULTIPLIER] + tests, log, extra) == 0
 
 
 def mutate(m, files, log):
@@ -210,7 +217,7 @@ def mutate(m, files, log):
             f.write(mutated)
         if not build(targets, log):
             return "broken", "the mutated tree does not build"
-        return ("NOT CAUGHT", "") if test(m["tests"], log) else ("caught", "")
+        return ("NOT CAUGHT", "") if test(m["tests"], m.get("filter"), log) else ("caught", "")
     finally:
         with open(path, "w") as f:
             f.write(clean)
@@ -234,23 +241,24 @@ def main(argv):
     files = tracked_files()
     sync(files)
     setup(log)
-    union = sorted({t for m in muts for t in m["tests"]})
     start = time.time()
     if not build([], log):
         sys.exit(f"mutate: the clean tree does not build; see {log}")
     if "--no-baseline" not in argv:
-        print("mutate: the clean tree against " + " ".join(union), flush=True)
-        if not test(union, log):
-            sys.exit(f"mutate: tests fail on the clean tree, so no result would mean anything; "
-                     f"see {log}")
+        # The clean tree against each test with each filter some mutation runs it with.
+        for filt in sorted({m.get("filter") for m in muts}, key=lambda f: f or ""):
+            tests = sorted({t for m in muts if m.get("filter") == filt for t in m["tests"]})
+            print("mutate: the clean tree against " + " ".join(tests) +
+                  (f" (cases {filt})" if filt else ""), flush=True)
+            if not test(tests, filt, log):
+                sys.exit(f"mutate: tests fail on the clean tree, so no result would mean "
+                         f"anything; see {log}")
     rows = []
     for m in muts:
         t0 = time.time()
         result, note = mutate(m, files, log)
         rows.append((m, result, note, time.time() - t0))
         print(f"  {result:10} {m['id']:28} {time.time() - t0:6.0f} s  {note}", flush=True)
-    # The source back as it was, and built, so the next run starts from a clean build.
-    build([], log)
     print(f"\n| mutation | module | file | tests | result |\n|---|---|---|---|---|")
     for m, result, note, _ in rows:
         shown = f"**{result}**" if result != "caught" else result
