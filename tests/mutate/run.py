@@ -15,7 +15,7 @@ mutated file recompiles, then links), and runs those tests. A mutation is
 
 Exit status 0 only when every mutation is caught. Standard library only.
 
-Usage: tests/mutate/run.py [--list] [--keep-going] [--no-baseline] [SUBSTRING...]
+Usage: tests/mutate/run.py [--list] [--no-baseline] [SUBSTRING...]
   SUBSTRING  run only the mutations whose id or title contains one of them
 Environment: MVOD_MUTATE_DIR (scratch folder, default $TMPDIR/mvod-mutate), kept between runs
 so that the next run rebuilds only what changed.
@@ -224,7 +224,13 @@ def mutate(m, files, log):
 
 
 def main(argv):
-    args = [a for a in argv if not a.startswith("--")]
+    if "-h" in argv or "--help" in argv:
+        print(__doc__)
+        return 0
+    unknown = [a for a in argv if a.startswith("-") and a not in ("--list", "--no-baseline")]
+    if unknown:
+        sys.exit(f"mutate: unknown option {unknown[0]} (--list, --no-baseline, --help)")
+    args = [a for a in argv if not a.startswith("-")]
     muts = parse(LIST)
     if "--list" in argv:
         for m in muts:
