@@ -17,7 +17,7 @@ DEBS := gcc g++ make pkg-config meson ninja-build \
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps build test test-asan test-fuzz fuzz fuzz-run demo bench install clean
+.PHONY: all deps build test test-asan test-fuzz fuzz fuzz-run mutate demo bench install clean
 
 all: build
 
@@ -88,6 +88,12 @@ fuzz-run: deps $(FUZZDIR)/build.ninja
 			$(FUZZDIR)/fuzz/*-timeout-*; do \
 			[ -f "$$f" ] && echo "$$f (base64): $$(head -c 3000 "$$f" | base64 -w0)"; \
 		done; exit 1; }
+
+# Mutation testing: each edit in tests/mutate/mutations.txt applied to a scratch copy of this
+# tree, built, and run against the tests that must catch it; exit 1 if one survives. Minutes,
+# not part of make test. MUTATE=substring runs only the matching mutations.
+mutate: deps
+	tests/mutate/run.py $(MUTATE)
 
 demo: build
 	@rm -rf $(DEMODIR) && mkdir -p $(DEMODIR)

@@ -60,7 +60,8 @@ void mvod_frame_err(const struct mvod_pose *e0, const struct mvod_pose *e1,
 struct mvod_rpe {
 	int n;                /* pairs counted */
 	double rot_deg_mean, rot_deg_max; /* full rotation angle of dR_e dR_g^T (relative poses) */
-	double dir_deg_mean, dir_deg_max; /* angle between translation directions (steps > 1 mm) */
+	double dir_deg_mean, dir_deg_max; /* angle between translation directions (ground-truth
+					    * steps > 1 mm; a held estimate counts 90 deg) */
 	int n_dir;
 	double trans_pct_mean; /* |t_e - t_g| of the relative poses, % of |t_g| (steps > 1 mm) */
 	int n_pct;

@@ -149,6 +149,13 @@ static void tally(double *sum, double *max, double v)
 		*max = v;
 }
 
+/*
+ * The direction error of an estimate that held still while the ground truth moved: it knows
+ * no direction, and a direction drawn at random is off by 90 deg on average. Leaving such
+ * steps out would score a motionless estimate as perfect.
+ */
+#define HELD_STEP_DIR_DEG 90.0
+
 /* The translation terms of relative steps de (estimate) and dg (ground truth). */
 static void rpe_add_step(struct mvod_rpe *acc, const double de[3], const double dg[3])
 {
@@ -157,11 +164,10 @@ static void rpe_add_step(struct mvod_rpe *acc, const double de[3], const double 
 		return;
 	acc->trans_pct_mean += 100 * mvod_vec3_dist(de, dg) / step;
 	acc->n_pct++;
-	/* A held estimate (no step) has no direction; its error already shows as 100 % above. */
-	if (mvod_vec3_norm(de) > 1e-9) {
-		tally(&acc->dir_deg_mean, &acc->dir_deg_max, mvod_vec3_angle(de, dg) * RAD2DEG);
-		acc->n_dir++;
-	}
+	double dir = mvod_vec3_norm(de) > 1e-9 ? mvod_vec3_angle(de, dg) * RAD2DEG
+						: HELD_STEP_DIR_DEG;
+	tally(&acc->dir_deg_mean, &acc->dir_deg_max, dir);
+	acc->n_dir++;
 }
 
 struct mvod_frame_err mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose *e0,

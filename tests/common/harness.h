@@ -59,6 +59,8 @@ void harness_wait_lines(const char *path, int n, pid_t pid);
  * lines lines, and returns its wait status; fails the test if it ends before.
  */
 int harness_signal_after(char *const argv[], const char *path, int lines, int sig);
+/* Replaces frame i (w x h) of a PNG sequence in images/ with a black P5 PGM: no features. */
+void harness_blacken(const char *images, int i, int w, int h);
 /* Renders a sequence with mvod-synth into dir; then extra arguments, NULL-terminated. */
 void harness_synth(const char *dir, const char *path_name, int frames, const char *format, ...);
 
@@ -66,10 +68,11 @@ void harness_synth(const char *dir, const char *path_name, int frames, const cha
 struct traj_errors {
 	int n;
 	struct mvod_rpe rpe;
-	double ate_m;     /* after alignment */
+	double ate_m;     /* after alignment; +inf when none exists (a motionless estimate) */
 	double scale;     /* similarity scale of the alignment (1 for SE(3)) */
 	double length_m;  /* ground-truth path length */
 	double max_translation; /* largest |t| of the estimate (drift of a static camera) */
+	double scale_drift; /* mvod_scale_drift: last 10 % against the first; NAN if undefined */
 };
 void harness_compare(const char *est_path, const char *gt_path, int sim3, struct traj_errors *e);
 

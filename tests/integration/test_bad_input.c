@@ -144,7 +144,7 @@ static void test_bad_option_values(void **state)
 	}
 }
 
-/* SIGKILL in the middle of a run leaves a trajectory whose every line parses. */
+/* SIGKILL in the middle of a run leaves a trajectory of whole lines only. */
 static void test_killed_run_leaves_complete_lines(void **state)
 {
 	(void)state;
@@ -158,13 +158,14 @@ static void test_killed_run_leaves_complete_lines(void **state)
 			"--trajectory", traj, "--no-lcm", "-q", NULL};
 	/* Kill as soon as a few poses are out, wherever the writer is. */
 	int st = harness_signal_after(argv, traj, 5, SIGKILL);
-	assert_true(WIFSIGNALED(st));
-	struct mvod_traj t;
-	char err[256];
-	if (mvod_traj_load(traj, &t, err, sizeof(err)) != 0)
-		fail_msg("killed run left an unparseable trajectory: %s", err);
-	assert_true(t.n >= 5 && t.n < 200);
-	mvod_traj_free(&t);
+	assert_true(WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) == 0));
+	/*
+	 * Strictly: every line parses and ends in its newline, so a line cut off after its last
+	 * digit (which would still parse) fails too. Up to all 200 lines: a fast machine may
+	 * have finished before the signal landed.
+	 */
+	int n = harness_traj_lines(traj);
+	assert_true(n >= 5 && n <= 200);
 }
 
 int main(void)

@@ -3,17 +3,17 @@
  * set in every status from then on (mvod.status_t FAULT_ bits), and mvod keeps publishing
  * poses where it can. Startup faults (a bad LCM URL here; a missing calibration in
  * test_bad_input) exit 1 with one clear message and leave no output file behind. A SIGTERM at a
- * random frame leaves a trajectory whose every line parses and an LCM log that reads to its end.
+ * frame drawn from a fixed seed leaves a trajectory whose every line parses and an LCM log that reads to its end.
  */
 #include <setjmp.h>
 #include <signal.h>
+#include <stdbool.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -61,16 +61,39 @@ static void run_mvod(const char *source, const char *cal, const char *out, const
 		fail_msg("mvod killed by signal %d: %s", r->status, r->err);
 }
 
+/* Fault bits over a log's statuses, in order. */
+struct fault_trail {
+	int32_t seen;    /* bits of the statuses so far */
+	int lost;        /* statuses missing a bit an earlier one had */
+	int early;       /* statuses before the last that carry the expected bits */
+	int32_t expect;
+};
+
+static void on_status(const mvod_status_t *msg, void *ctx)
+{
+	struct fault_trail *f = ctx;
+	f->lost += (f->seen & ~msg->faults) != 0;
+	f->seen |= msg->faults;
+	f->early += msg->state != MVOD_POSE_T_STATE_STOPPING && f->expect &&
+		    (msg->faults & f->expect) == f->expect;
+}
+
 /*
  * The LCM log decodes whole: n poses, numbered in order but for gaps where frames were
  * skipped (gaps < 0: any number, for a live source that may drop frames under load), and a
- * last status saying mvod stopped, with faults.
+ * last status saying mvod stopped, with faults. A fault bit, once set, is in every status
+ * after; a fault met while frames still follow (mid_run) is in a status before the last one:
+ * the frame after it publishes status at once, whatever the periodic schedule.
  */
-static void check_log(int n, int gaps, int32_t faults)
+static void check_log(int n, int gaps, int32_t faults, bool mid_run)
 {
 	struct log_contents c;
-	harness_read_log(lcmlog, &c, NULL, NULL);
+	struct fault_trail trail = {.expect = faults};
+	harness_read_log(lcmlog, &c, on_status, &trail);
 	assert_int_equal(c.bad, 0);
+	assert_int_equal(trail.lost, 0);
+	if (mid_run)
+		assert_true(trail.early > 0);
 	if (gaps >= 0)
 		assert_int_equal(c.gaps, gaps);
 	assert_int_equal(c.poses, n);
@@ -95,7 +118,7 @@ static void expect_broken(const char *query, int gaps)
 		fail_msg("expected exit 1 and one 'broke off' line, got %d: %s", r.status, r.err);
 	int n = harness_traj_lines(traj);
 	assert_true(n > 0 && n < FRAMES);
-	check_log(n, gaps, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
+	check_log(n, gaps, MVOD_STATUS_T_FAULT_SOURCE_BROKEN, false);
 }
 
 static void test_truncated_video(void **state)
@@ -116,7 +139,7 @@ static void spoil_images(const char *from, const char *dir)
 {
 	char cmd[1400];
 	snprintf(cmd, sizeof(cmd),
-		 "cp -r '%s/images' '%s' && head -c 100 /dev/urandom > '%s/000004.png' && "
+		 "cp -r '%s/images' '%s' && yes 'not a PNG' | head -c 100 > '%s/000004.png' && "
 		 ": > '%s/000007.png'", from, dir, dir, dir);
 	assert_int_equal(system(cmd), 0);
 }
@@ -138,7 +161,7 @@ static void test_unreadable_frames_skipped(void **state)
 			 r.status, r.err);
 	assert_non_null(strstr(r.err, "frame 4"));
 	assert_int_equal(harness_traj_lines(traj), 10);
-	check_log(10, 2, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+	check_log(10, 2, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE, true);
 }
 
 /* A full disk: poses still go out over LCM, one error, and exit 1 for the incomplete file. */
@@ -149,7 +172,7 @@ static void test_trajectory_disk_full(void **state)
 	run_mvod(video, calib, "/dev/full", url, &r);
 	if (r.status != 1 || count(r.err, "No space left") != 1 || count(r.err, "\n") != 1)
 		fail_msg("expected exit 1 and one 'No space left' line, got %d: %s", r.status, r.err);
-	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
+	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE, true);
 }
 
 /*
@@ -171,7 +194,7 @@ static void test_trajectory_reader_gone(void **state)
 	harness_read_file(err_path, err, sizeof(err));
 	if (status != 1 || count(err, "Broken pipe") != 1 || count(err, "\n") != 1)
 		fail_msg("expected exit 1 and one 'Broken pipe' line, got %d: %s", status, err);
-	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE);
+	check_log(FRAMES, 0, MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE, true);
 }
 
 /*
@@ -193,7 +216,11 @@ static void test_invalid_lcm_url(void **state)
 	}
 }
 
-/* SIGTERM after a random number of poses: both outputs are whole and agree. */
+/*
+ * SIGTERM after a number of poses drawn from a fixed seed (the same every run): both outputs
+ * are whole and agree. mvod may have finished the clip before the signal lands on a fast
+ * machine, so all 300 lines is a pass too.
+ */
 static void test_sigterm_leaves_whole_outputs(void **state)
 {
 	(void)state;
@@ -202,10 +229,9 @@ static void test_sigterm_leaves_whole_outputs(void **state)
 	harness_synth(dir, "forward", 300, "mkv", "--size", "320x240", NULL);
 	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
 	snprintf(cal, sizeof(cal), "%s/calib.json", dir);
-	unsigned seed = (unsigned)time(NULL);
-	srand(seed);
+	srand(17);
 	int at = 2 + rand() % 150;
-	printf("SIGTERM after %d poses (seed %u)\n", at, seed);
+	printf("SIGTERM after %d poses\n", at);
 	unlink(traj);
 	char *argv[] = {(char *)harness_bin("MVOD"), "--source", src, "--calib", cal,
 			"--trajectory", traj, "--lcm-url", url, "-q", NULL};
@@ -213,8 +239,8 @@ static void test_sigterm_leaves_whole_outputs(void **state)
 	assert_true(WIFEXITED(st));
 	assert_int_equal(WEXITSTATUS(st), 0);
 	int n = harness_traj_lines(traj);
-	assert_true(n >= at && n < 300);
-	check_log(n, 0, 0);
+	assert_true(n >= at && n <= 300);
+	check_log(n, 0, 0, false);
 }
 
 int main(void)

@@ -126,6 +126,27 @@ static void test_turn_fisheye_lens(void **state)
 	assert_true(e.ate_m < 0.02 * e.length_m); /* 0.060 m over 7.9 m */
 }
 
+/*
+ * Free scale on a path whose speed keeps changing: from 0.5 to 1.5 m/s, braking to a stop,
+ * standing, pulling away (mvod-synth's stop-go). Measured: ATE 1.29 % of the path, scale drift
+ * 0.614 (the scale of the last 10 % of the path against the first). That is no better than
+ * carrying the last step forward (constant speed alone: 1.53 %, 0.682): at 0.1 m steps fewer
+ * than 10 point pairs lie within the 50 baselines structure scale needs in most frames, and
+ * where it does work it drifts (issue: free-scale drift on variable speed). Until the VO does
+ * better, the bounds catch a scale that collapses or blows up: drift within a factor of 2
+ * either way, ATE twice the measured.
+ */
+static void test_stop_go_free_scale(void **state)
+{
+	(void)state;
+	struct traj_errors e;
+	run_vo(&(struct vo_case){.path = "stop-go", .frames = 100, .scale = "auto"}, &e);
+	print_message("stop-go: scale drift %.4f\n", e.scale_drift);
+	assert_true(e.rpe.rot_deg_mean < 0.16); /* measured 0.061 */
+	assert_true(e.ate_m < 0.026 * e.length_m);
+	assert_true(fabs(log(e.scale_drift)) < log(2.0));
+}
+
 static void test_static_no_drift(void **state)
 {
 	(void)state;
@@ -147,21 +168,6 @@ static void test_rotate_in_place_no_drift(void **state)
 	assert_true(e.max_translation < 1e-6);
 }
 
-/* A black frame (P5 PGM of zeros) replacing frame i of an images/ sequence. */
-static void blacken(const char *images, int i, int w, int h)
-{
-	char path[400];
-	snprintf(path, sizeof(path), "%s/%06d.png", images, i);
-	assert_int_equal(unlink(path), 0);
-	snprintf(path, sizeof(path), "%s/%06d.pgm", images, i);
-	FILE *f = fopen(path, "wb");
-	assert_non_null(f);
-	fprintf(f, "P5\n%d %d\n255\n", w, h);
-	for (int k = 0; k < w * h; k++)
-		fputc(0, f);
-	fclose(f);
-}
-
 static void test_black_frames_hold_and_recover(void **state)
 {
 	(void)state;
@@ -169,8 +175,8 @@ static void test_black_frames_hold_and_recover(void **state)
 	snprintf(dir, sizeof(dir), "%s/black", harness_tmpdir());
 	harness_synth(dir, "forward", 30, "png", NULL);
 	snprintf(images, sizeof(images), "%s/images", dir);
-	blacken(images, 10, 640, 480);
-	blacken(images, 11, 640, 480);
+	harness_blacken(images, 10, 640, 480);
+	harness_blacken(images, 11, 640, 480);
 	snprintf(src, sizeof(src), "images:%s", images);
 	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
 	snprintf(gt, sizeof(gt), "%s/gt.tum", dir);
@@ -205,6 +211,7 @@ int main(void)
 		cmocka_unit_test(test_turn_free_scale),
 		cmocka_unit_test(test_turn_radtan_lens),
 		cmocka_unit_test(test_turn_fisheye_lens),
+		cmocka_unit_test(test_stop_go_free_scale),
 		cmocka_unit_test(test_static_no_drift),
 		cmocka_unit_test(test_rotate_in_place_no_drift),
 		cmocka_unit_test(test_black_frames_hold_and_recover),

@@ -107,6 +107,25 @@ static void test_rpe_pure_direction_error(void **state)
 	assert_true(fabs(r.trans_pct_mean - 100) < 1e-9);
 }
 
+/*
+ * An estimate that never moves while the truth does: no direction at all, which must not read
+ * as a perfect one (it would let a motionless VO pass every direction bound).
+ */
+static void test_rpe_held_estimate(void **state)
+{
+	(void)state;
+	struct mvod_pose g[5], e[5];
+	straight(g, 5, 0);
+	straight(e, 5, 0);
+	for (int i = 0; i < 5; i++)
+		e[i].t[2] = 0;
+	struct mvod_rpe r;
+	rpe_run(e, g, 5, &r);
+	assert_int_equal(r.n_dir, 4);
+	assert_true(r.dir_deg_mean == 90 && r.dir_deg_max == 90);
+	assert_true(fabs(r.trans_pct_mean - 100) < 1e-9);
+}
+
 static void test_euler_y_sign_and_range(void **state)
 {
 	(void)state;
@@ -322,6 +341,57 @@ static void test_kitti_yaw_drift(void **state)
 	assert_true(fabs(k.r_rel_deg_100m - 1.0 * kitti_overshoot()) < 1e-9);
 }
 
+/*
+ * A circle of radius KR at 1 m of arc per frame, heading along the tangent. The estimate is the
+ * same path moved rigidly (turned 30 deg about y, shifted), its positions then scaled by
+ * `scale`: relative poses do not see the rigid motion, so the segment errors are exactly those
+ * of the scale, 0.01 of each segment's chord (2 KR |sin(a / 2 KR)| for an arc of a metres).
+ */
+#define KR 100.0
+
+static void circle(struct mvod_pose *g, struct mvod_pose *e, double scale)
+{
+	const double w[3] = {0, M_PI / 6, 0}, shift[3] = {5, 0, -3};
+	double T[9];
+	mvod_rot_exp(w, T);
+	for (int i = 0; i < KN; i++) {
+		double a = i / KR, yaw[3] = {0, a, 0};
+		mvod_rot_exp(yaw, g[i].R);
+		g[i].t[0] = KR * (1 - cos(a));
+		g[i].t[1] = 0;
+		g[i].t[2] = KR * sin(a);
+		mvod_mat3_mul(T, g[i].R, e[i].R);
+		mvod_mat3_vec(T, g[i].t, e[i].t);
+		for (int k = 0; k < 3; k++)
+			e[i].t[k] = scale * (e[i].t[k] + shift[k]);
+	}
+}
+
+static void test_kitti_turning_path(void **state)
+{
+	(void)state;
+	static struct mvod_pose g[KN], e[KN];
+	static double dist[KN];
+	struct mvod_kitti_rel k;
+	circle(g, e, 1.0);
+	mvod_kitti_segments(e, g, KN, dist, &k);
+	/* The chord of each 1 m step is a hair under 1 m, so segments end where a line's do. */
+	assert_int_equal(k.n_segments, 440);
+	assert_true(fabs(k.t_rel_pct) < 1e-9 && fabs(k.r_rel_deg_100m) < 1e-9);
+	circle(g, e, 1.01);
+	mvod_kitti_segments(e, g, KN, dist, &k);
+	/* As in kitti_overshoot: 100 - L/10 segments of L = 100k m, each L + 1 m of arc. */
+	double want = 0;
+	for (int j = 1; j <= 8; j++) {
+		double len = 100.0 * j, chord = 2 * KR * fabs(sin((len + 1) / (2 * KR)));
+		want += (100 - 10 * j) * 100 * 0.01 * chord / len;
+	}
+	want /= 440;
+	print_message("t_rel on the circle: %.6f %% (expected %.6f %%)\n", k.t_rel_pct, want);
+	assert_true(fabs(k.t_rel_pct - want) < 1e-9);
+	assert_true(fabs(k.r_rel_deg_100m) < 1e-9);
+}
+
 static void test_kitti_short_path(void **state)
 {
 	(void)state;
@@ -346,6 +416,7 @@ int main(void)
 		cmocka_unit_test(test_umeyama_degenerate),
 		cmocka_unit_test(test_rpe_pure_yaw_error),
 		cmocka_unit_test(test_rpe_pure_direction_error),
+		cmocka_unit_test(test_rpe_held_estimate),
 		cmocka_unit_test(test_euler_y_sign_and_range),
 		cmocka_unit_test(test_frame_err_pure_yaw),
 		cmocka_unit_test(test_frame_err_pure_step),
@@ -355,6 +426,7 @@ int main(void)
 		cmocka_unit_test(test_scale_drift_halved),
 		cmocka_unit_test(test_kitti_longer_steps),
 		cmocka_unit_test(test_kitti_yaw_drift),
+		cmocka_unit_test(test_kitti_turning_path),
 		cmocka_unit_test(test_kitti_short_path),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -45,17 +45,31 @@ static void test_quat_round_trip(void **state)
 	}
 }
 
+/*
+ * A quarter turn about each axis, against values worked out by hand: q = (cos 45, sin 45 along
+ * the axis), and the turn carries the next axis into the one after (x to y, y to z, z to x).
+ */
 static void test_quat_known_value(void **state)
 {
 	(void)state;
-	/* 90 deg about z: q = (cos 45, 0, 0, sin 45); x maps to y. */
-	double w[3] = {0, 0, M_PI / 2}, R[9], q[4];
-	mvod_rot_exp(w, R);
-	mvod_rot_to_quat(R, q);
-	assert_true(fabs(q[0] - M_SQRT1_2) < 1e-12 && fabs(q[3] - M_SQRT1_2) < 1e-12);
-	double x[3] = {1, 0, 0}, y[3];
-	mvod_mat3_vec(R, x, y);
-	assert_true(fabs(y[0]) < 1e-12 && fabs(y[1] - 1) < 1e-12);
+	for (int a = 0; a < 3; a++) {
+		double w[3] = {0, 0, 0}, R[9], q[4], from[3] = {0, 0, 0}, to[3];
+		w[a] = M_PI / 2;
+		mvod_rot_exp(w, R);
+		mvod_rot_to_quat(R, q);
+		assert_true(fabs(q[0] - M_SQRT1_2) < 1e-12);
+		for (int k = 0; k < 3; k++)
+			assert_true(fabs(q[1 + k] - (k == a ? M_SQRT1_2 : 0)) < 1e-12);
+		from[(a + 1) % 3] = 1;
+		mvod_mat3_vec(R, from, to);
+		for (int k = 0; k < 3; k++)
+			assert_true(fabs(to[k] - (k == (a + 2) % 3 ? 1 : 0)) < 1e-12);
+		/* And back: the hand-made quaternion gives the same matrix. */
+		double qh[4] = {M_SQRT1_2, 0, 0, 0}, Rh[9];
+		qh[1 + a] = M_SQRT1_2;
+		mvod_quat_to_rot(qh, Rh);
+		assert_mat_near(R, Rh, 9, 1e-12);
+	}
 }
 
 static void test_pose_inverse_compose(void **state)

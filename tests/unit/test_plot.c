@@ -134,6 +134,73 @@ static void test_circle_vs_gt(void **state)
 	assert_int_equal(count_hidden(t->dir), 0);
 }
 
+/* The x or y (axis 0 or 1) of every pixel of exactly colour bgr, in order; how many. */
+static int colour_coords(const struct mvod_image *im, const uint8_t bgr[3], int axis, int *out)
+{
+	int n = 0;
+	for (int y = 0; y < im->h; y++)
+		for (int x = 0; x < im->w; x++)
+			if (!memcmp(im->data + (size_t)y * im->stride + 3 * x, bgr, 3))
+				out[n++] = axis ? y : x;
+	return n;
+}
+
+static int cmp_int(const void *a, const void *b)
+{
+	return *(const int *)a - *(const int *)b;
+}
+
+/*
+ * Width of the middle 90 % of the pixels of colour bgr along an axis: for a ring drawn evenly
+ * around, 2 R cos(9 deg) whichever the axis. Percentiles, not the extremes, so that the
+ * legend's short sample of the same colour does not count.
+ */
+static double spread(const struct mvod_image *im, const uint8_t bgr[3], int axis, int *n)
+{
+	static int c[PLOT_W * PLOT_H];
+	*n = colour_coords(im, bgr, axis, c);
+	if (*n < 20)
+		return 0;
+	qsort(c, (size_t)*n, sizeof(c[0]), cmp_int);
+	return c[*n * 95 / 100] - c[*n * 5 / 100];
+}
+
+/*
+ * The pixels, not only the PNG header: the estimate (radius 5 m, blue) and the ground truth
+ * (radius 5.4 m, grey, dashed) come out as rings of those radii, at one scale for both axes
+ * (measured 523 x 525 px), on a white canvas.
+ */
+static void test_circle_pixels(void **state)
+{
+	(void)state;
+	static uint8_t px[PLOT_W * PLOT_H * 3];
+	struct mvod_image im = {PLOT_W, PLOT_H, 3 * PLOT_W, MVOD_PIX_BGR, px};
+	double est[3 * N_CIRCLE], gt[3 * N_CIRCLE];
+	circle(est, N_CIRCLE, 5.0);
+	circle(gt, N_CIRCLE, 5.4);
+	assert_int_equal(mvod_plot_topdown_draw(&im, "rings", est, N_CIRCLE, NULL, gt, N_CIRCLE, "m"),
+			 0);
+	static const uint8_t white[3] = {255, 255, 255};
+	assert_memory_equal(px, white, 3);
+	assert_memory_equal(px + sizeof(px) - 3, white, 3);
+	/* plot_shim.cpp's EST_COLOR and GT_COLOR, as B, G, R. */
+	static const uint8_t blue[3] = {190, 90, 20}, grey[3] = {70, 70, 70};
+	int ne, ng;
+	double ex = spread(&im, blue, 0, &ne), ey = spread(&im, blue, 1, &ne);
+	double gx = spread(&im, grey, 0, &ng);
+	print_message("estimate: %d px, %.0f x %.0f; ground truth: %d px, %.0f across\n", ne, ex,
+		      ey, ng, gx);
+	/* A 2 px line around a ring several hundred pixels across: thousands of pixels. */
+	assert_true(ne > 1000 && ng > 500);
+	/* Equal aspect: as wide as tall, to the 3 % the legend sample and line ends may shift. */
+	assert_true(fabs(ex / ey - 1) < 0.03);
+	/*
+	 * 5.4 / 5 = 1.08 between the rings across (measured 1.082). Not down: the legend's dashed
+	 * sample and the grey end marker, both in the ground truth's colour, sit above and below.
+	 */
+	assert_true(fabs(gx / ex - 1.08) < 0.02);
+}
+
 /* Also replaces an existing file by rename. */
 static void test_static_point(void **state)
 {
@@ -315,6 +382,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test_setup_teardown(test_circle_vs_gt, setup, teardown),
+		cmocka_unit_test(test_circle_pixels),
 		cmocka_unit_test_setup_teardown(test_static_point, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_degenerate_inputs, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_line_and_zigzag, setup, teardown),

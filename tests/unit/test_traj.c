@@ -130,6 +130,78 @@ static void test_no_negative_zero(void **state)
 	}
 }
 
+/*
+ * TUM lines checked against the format's definition, not against mvod's own reader: "timestamp
+ * tx ty tz qx qy qz qw", the unit quaternion (Hamilton, scalar last) of the camera-to-world
+ * rotation. A quarter turn about z maps x to y: (0, 0, sin 45, cos 45); about y, z to x:
+ * (0, sin 45, 0, cos 45); about x, y to z: (sin 45, 0, 0, cos 45). The matrices are written
+ * out by hand (row-major), so that no conversion of mvod's stands between them and the text.
+ */
+static const struct {
+	double R[9];
+	const char *line;
+} tum_golden[] = {
+	{{0, -1, 0, 1, 0, 0, 0, 0, 1}, "12.500000 1 -2 3.25 0 0 0.707106781 0.707106781\n"},
+	{{0, 0, 1, 0, 1, 0, -1, 0, 0}, "12.500000 1 -2 3.25 0 0.707106781 0 0.707106781\n"},
+	{{1, 0, 0, 0, 0, -1, 0, 1, 0}, "12.500000 1 -2 3.25 0.707106781 0 0 0.707106781\n"},
+};
+
+static void test_tum_golden_lines(void **state)
+{
+	(void)state;
+	char path[128], text[256];
+	snprintf(path, sizeof(path), "%s/golden.tum", dir);
+	for (size_t i = 0; i < sizeof(tum_golden) / sizeof(tum_golden[0]); i++) {
+		struct mvod_traj_writer *w;
+		assert_int_equal(mvod_traj_writer_open(path, MVOD_TRAJ_TUM, &w), 0);
+		struct mvod_pose p = {.t = {1, -2, 3.25}};
+		memcpy(p.R, tum_golden[i].R, sizeof(p.R));
+		assert_int_equal(mvod_traj_writer_add(w, 12.5, &p), 0);
+		assert_int_equal(mvod_traj_writer_close(w), 0);
+		harness_read_file(path, text, sizeof(text));
+		assert_string_equal(text, tum_golden[i].line);
+	}
+	/* Read: a hand-written line (7 digits, as other tools write) gives back the matrix. */
+	for (size_t i = 0; i < sizeof(tum_golden) / sizeof(tum_golden[0]); i++) {
+		harness_write_file(path, tum_golden[i].line);
+		struct mvod_traj tr;
+		char err[256];
+		assert_int_equal(mvod_traj_load(path, &tr, err, sizeof(err)), 0);
+		assert_int_equal(tr.n, 1);
+		assert_true(tr.t[0] == 12.5);
+		for (int k = 0; k < 9; k++)
+			assert_true(fabs(tr.pose[0].R[k] - tum_golden[i].R[k]) < 1e-8);
+		mvod_traj_free(&tr);
+	}
+}
+
+/*
+ * SIGHUP reopens the trajectory by name. After a rotation (rename) that is a new file; when
+ * nothing moved the file it is the same one, and its lines must stay: reopening appends.
+ */
+static void test_reopen_appends(void **state)
+{
+	(void)state;
+	char path[128], moved[140];
+	snprintf(path, sizeof(path), "%s/reopen.tum", dir);
+	snprintf(moved, sizeof(moved), "%s.1", path);
+	struct mvod_traj_writer *w;
+	struct mvod_pose p;
+	make_pose(1, &p);
+	assert_int_equal(mvod_traj_writer_open(path, MVOD_TRAJ_TUM, &w), 0);
+	for (int i = 0; i < 2; i++)
+		assert_int_equal(mvod_traj_writer_add(w, i, &p), 0);
+	assert_int_equal(mvod_traj_writer_reopen(w), 0);
+	assert_int_equal(mvod_traj_writer_add(w, 2, &p), 0);
+	assert_int_equal(harness_count_lines(path), 3);
+	assert_int_equal(rename(path, moved), 0);
+	assert_int_equal(mvod_traj_writer_reopen(w), 0);
+	assert_int_equal(mvod_traj_writer_add(w, 3, &p), 0);
+	assert_int_equal(mvod_traj_writer_close(w), 0);
+	assert_int_equal(harness_count_lines(moved), 3);
+	assert_int_equal(harness_count_lines(path), 1);
+}
+
 static void test_writer_reports_full_disk(void **state)
 {
 	(void)state;
@@ -169,6 +241,8 @@ int main(void)
 		cmocka_unit_test(test_kitti_round_trip),
 		cmocka_unit_test(test_load_errors),
 		cmocka_unit_test(test_no_negative_zero),
+		cmocka_unit_test(test_tum_golden_lines),
+		cmocka_unit_test(test_reopen_appends),
 		cmocka_unit_test(test_writer_reports_full_disk),
 		cmocka_unit_test(test_path_decimates_in_fixed_memory),
 	};

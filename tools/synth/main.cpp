@@ -75,6 +75,9 @@ Options:
       rotate-in-place    yaw swinging +-30 deg (left first, period 6 s) about the camera
                          centre, no translation
       static             the identity pose in every frame
+      stop-go            a gentle left curve (radius 40 m) at a changing speed: 0.5 to 1.5
+                         times --speed over the first quarter of the time, braking to a stop
+                         at 40%, standing until 50%, pulling away to --speed by 65%
       FILE               KITTI (12 numbers per line) or TUM (t tx ty tz qx qy qz qw) poses,
                          camera-to-world, metres, y down; a street is built along them
   --frames N             frames to render (default 60; for a FILE its first N poses,

@@ -136,6 +136,40 @@ Trajectory turn(int frames, double fps, double speed)
 	return along_curve(bump, 0, frames, fps, speed);
 }
 
+// Stop and go along a gentle left curve (radius 40 m): speeding up from 0.5 to 1.5 times
+// `speed` over the first quarter of the time, braking to a standstill by 40 %, standing until
+// 50 %, pulling away to `speed` by 65 % and holding it. No step length repeats the one before,
+// so a VO that carried its last step forward (constant speed) drifts in scale.
+Trajectory stop_go(int frames, double fps, double speed)
+{
+	const auto v = [](double u) { // speed as a fraction of `speed`, u = fraction of the time
+		if (u < 0.25)
+			return 0.5 + 4 * u;
+		if (u < 0.4)
+			return 1.5 * (0.4 - u) / 0.15;
+		if (u < 0.5)
+			return 0.0;
+		return u < 0.65 ? (u - 0.5) / 0.15 : 1.0;
+	};
+	Trajectory tr;
+	tr.times = frame_times(frames, fps);
+	const double duration = std::max(tr.times.back(), 1e-9);
+	// Arc length by the midpoint rule over 100 sub-steps a frame: exact for the linear pieces
+	// but for the sub-step holding a corner of the profile, which is the ground truth anyway.
+	std::vector<double> s;
+	double arc = 0, t = 0;
+	for (double target : tr.times) {
+		for (const double h = (target - t) / 100; t < target - 0.5 * h; t += h)
+			arc += h * speed * v((t + 0.5 * h) / duration);
+		t = target;
+		s.push_back(arc);
+	}
+	for (const Planar &p : drive([](double) { return 1 / 40.0; }, s))
+		tr.poses.push_back(planar_pose(p));
+	tr.skeleton = positions(tr.poses);
+	return tr;
+}
+
 Trajectory circle(int frames, double fps, double speed)
 {
 	return along_curve([](double) { return 1 / kLoopRadius; }, 2 * CV_PI * kLoopRadius, frames, fps, speed);
@@ -173,7 +207,7 @@ Trajectory still(int frames, double fps, double)
 using PathFunction = Trajectory (*)(int frames, double fps, double speed);
 const std::pair<const char *, PathFunction> kBuiltins[] = {
 	{"forward", forward}, {"turn", turn}, {"circle", circle}, {"figure8", figure8},
-	{"rotate-in-place", rotate_in_place}, {"static", still},
+	{"rotate-in-place", rotate_in_place}, {"static", still}, {"stop-go", stop_go},
 };
 
 // Files round their rotations (KITTI to 7 digits); the nearest true rotation is rendered and

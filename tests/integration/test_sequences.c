@@ -1,0 +1,236 @@
+/*
+ * What mvod publishes, frame by frame, on sequences whose behaviour is known: every pose on
+ * MVOD_POSE is the pose of its trajectory line (same frame, time, position and rotation); the
+ * state, frame_status and scale_source of each pose follow the VO's rules; and every change
+ * of state goes out in a status with the very frame that made it (not at the next periodic
+ * status). Nothing here depends on how fast the machine is: each assertion is about which
+ * frame carries what.
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+#include "mvod/geom.h"
+#include "mvod_pose_t.h"
+
+#define MAX_POSES 64
+
+/* The poses and statuses of one run, and its trajectory. */
+struct run {
+	mvod_pose_t pose[MAX_POSES];
+	mvod_status_t status[4 * MAX_POSES];
+	int poses, statuses;
+	struct mvod_traj traj;
+};
+
+/* mvod --scale auto on source, trajectory and LCM log into dir. */
+static void run_mvod(const char *dir, const char *source, struct run *r)
+{
+	char calib[300], traj[300], log[300], url[320];
+	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
+	snprintf(traj, sizeof(traj), "%s/est.tum", dir);
+	snprintf(log, sizeof(log), "%s/mvod.lcmlog", dir);
+	snprintf(url, sizeof(url), "file://%s?mode=w", log);
+	char *argv[] = {(char *)harness_bin("MVOD"), "-q", "--source", (char *)source, "--calib",
+			calib, "--trajectory", traj, "--lcm-url", url, NULL};
+	struct run_result res;
+	assert_int_equal(harness_run(argv, &res), 0);
+	if (!res.exited || res.status != 0)
+		fail_msg("mvod failed (%d): %s", res.status, res.err);
+	r->poses = harness_poses(log, r->pose, MAX_POSES);
+	r->statuses = harness_statuses(log, r->status, 4 * MAX_POSES);
+	assert_true(r->poses <= MAX_POSES && r->statuses <= 4 * MAX_POSES);
+	char err[512];
+	if (mvod_traj_load(traj, &r->traj, err, sizeof(err)))
+		fail_msg("%s", err);
+}
+
+/*
+ * Pose i is trajectory line i: frame number i, the line's time (printed to the microsecond),
+ * its position (printed to 9 significant digits) and its rotation (a quaternion to 9 digits:
+ * matrix entries to ~1e-8).
+ */
+static void poses_match_trajectory(const struct run *r, int frames)
+{
+	assert_int_equal(r->poses, frames);
+	assert_int_equal(r->traj.n, frames);
+	for (int i = 0; i < frames; i++) {
+		const mvod_pose_t *p = &r->pose[i];
+		const struct mvod_pose *l = &r->traj.pose[i];
+		assert_int_equal(p->frame, i);
+		assert_true(fabs(p->utime / 1e6 - r->traj.t[i]) <= 0.5e-6 + 1e-9);
+		for (int k = 0; k < 3; k++)
+			if (fabs(p->position[k] - l->t[k]) > 1e-8 * fmax(1, fabs(l->t[k])))
+				fail_msg("frame %d: position[%d] %.12g on LCM, %.12g in the file", i,
+					 k, p->position[k], l->t[k]);
+		double R[9];
+		mvod_quat_to_rot(p->orientation, R);
+		for (int k = 0; k < 9; k++)
+			if (fabs(R[k] - l->R[k]) > 1e-8)
+				fail_msg("frame %d: rotation entry %d %.12g on LCM, %.12g in the file",
+					 i, k, R[k], l->R[k]);
+	}
+}
+
+/*
+ * Each pose whose state differs from the one before (the first: from STARTING) has a status
+ * published with it: the status counting frames up to and including it, in the new state.
+ */
+static void state_changes_published(const struct run *r)
+{
+	int prev = MVOD_POSE_T_STATE_STARTING;
+	for (int i = 0; i < r->poses; i++) {
+		int st = r->pose[i].state;
+		if (st == prev)
+			continue;
+		bool found = false;
+		for (int k = 0; k < r->statuses && !found; k++)
+			found = r->status[k].frames == i + 1 && r->status[k].state == st;
+		if (!found)
+			fail_msg("frame %d: the state became %d, but no status says so with it", i, st);
+		prev = st;
+	}
+}
+
+/* Frame i's (frame_status, state, scale_source), failing with the frame named. */
+static void expect_pose(const struct run *r, int i, int status, int state, int scale)
+{
+	const mvod_pose_t *p = &r->pose[i];
+	if (p->frame_status != status || p->state != state || p->scale_source != scale)
+		fail_msg("frame %d: frame_status %d, state %d, scale_source %d; expected %d, %d, %d",
+			 i, p->frame_status, p->state, p->scale_source, status, state, scale);
+}
+
+/*
+ * A free-scale run from its start: the first frame; rotation-only frames (scale none) until
+ * parallax allows the first motion, whose length defines the unit; tracking from then on.
+ * Returns the first motion frame.
+ */
+static int expect_start(const struct run *r)
+{
+	expect_pose(r, 0, MVOD_POSE_T_FRAME_FIRST, MVOD_POSE_T_STATE_INITIALIZING,
+		    MVOD_POSE_T_SCALE_NONE);
+	int i = 1;
+	for (; i < r->poses && r->pose[i].frame_status != MVOD_POSE_T_FRAME_MOTION; i++)
+		expect_pose(r, i, MVOD_POSE_T_FRAME_ROTATION, MVOD_POSE_T_STATE_INITIALIZING,
+			    MVOD_POSE_T_SCALE_NONE);
+	assert_true(i < r->poses);
+	expect_pose(r, i, MVOD_POSE_T_FRAME_MOTION, MVOD_POSE_T_STATE_TRACKING,
+		    MVOD_POSE_T_SCALE_UNIT);
+	return i;
+}
+
+/*
+ * Frames first .. last - 1 while tracking: motion, scaled by the structure the step shares
+ * with the one before or, when too little of it is shared, at the last step's length
+ * (constant speed); or rotation only (no translation, scale none). Returns how many motion
+ * frames the structure scaled.
+ */
+static int expect_tracking(const struct run *r, int first, int last)
+{
+	int structure = 0;
+	for (int i = first; i < last; i++) {
+		const mvod_pose_t *p = &r->pose[i];
+		bool motion = p->frame_status == MVOD_POSE_T_FRAME_MOTION;
+		bool by_structure = motion && p->scale_source == MVOD_POSE_T_SCALE_STRUCTURE;
+		expect_pose(r, i, motion ? MVOD_POSE_T_FRAME_MOTION : MVOD_POSE_T_FRAME_ROTATION,
+			    MVOD_POSE_T_STATE_TRACKING,
+			    !motion        ? MVOD_POSE_T_SCALE_NONE
+			    : by_structure ? MVOD_POSE_T_SCALE_STRUCTURE
+					   : MVOD_POSE_T_SCALE_CONSTANT_SPEED);
+		structure += by_structure;
+	}
+	return structure;
+}
+
+/* mvod on a 320x240 video of an mvod-synth path; its poses checked against its trajectory. */
+static void run_path(const char *path, int frames, struct run *r)
+{
+	char dir[300], src[320];
+	snprintf(dir, sizeof(dir), "%s/%s", harness_tmpdir(), path);
+	harness_synth(dir, path, frames, "mkv", "--size", "320x240", NULL);
+	snprintf(src, sizeof(src), "file:%s/video.mkv", dir);
+	run_mvod(dir, src, r);
+	poses_match_trajectory(r, frames);
+}
+
+static void test_forward(void **state)
+{
+	(void)state;
+	struct run r;
+	run_path("forward", 30, &r);
+	/*
+	 * Structure scales most steps: measured 14 of the 17 motion frames after the first (the
+	 * rest fall back to constant speed); fewer than 6 means the structure is not being used.
+	 */
+	int structure = expect_tracking(&r, expect_start(&r) + 1, 30);
+	print_message("%d motion frames scaled by structure\n", structure);
+	assert_true(structure >= 6);
+	state_changes_published(&r);
+	mvod_traj_free(&r.traj);
+}
+
+/* Identical frames: rotation only, never tracking, not a step of translation. */
+static void test_static(void **state)
+{
+	(void)state;
+	struct run r;
+	run_path("static", 10, &r);
+	expect_pose(&r, 0, MVOD_POSE_T_FRAME_FIRST, MVOD_POSE_T_STATE_INITIALIZING,
+		    MVOD_POSE_T_SCALE_NONE);
+	for (int i = 1; i < 10; i++) {
+		expect_pose(&r, i, MVOD_POSE_T_FRAME_ROTATION, MVOD_POSE_T_STATE_INITIALIZING,
+			    MVOD_POSE_T_SCALE_NONE);
+		assert_true(mvod_vec3_norm(r.pose[i].position) == 0);
+	}
+	state_changes_published(&r);
+	mvod_traj_free(&r.traj);
+}
+
+/*
+ * Two black frames (10, 11) in a forward run: each has too few features, and tracking is LOST
+ * with the first; the pose holds. Frame 12 matches against frame 9, the reference kept through
+ * the loss: TRACKING again at once.
+ */
+static void test_black_frames_lost_and_back(void **state)
+{
+	(void)state;
+	char dir[300], images[320], src[340];
+	snprintf(dir, sizeof(dir), "%s/black", harness_tmpdir());
+	harness_synth(dir, "forward", 20, "png", "--size", "320x240", NULL);
+	snprintf(images, sizeof(images), "%s/images", dir);
+	harness_blacken(images, 10, 320, 240);
+	harness_blacken(images, 11, 320, 240);
+	snprintf(src, sizeof(src), "images:%s", images);
+	struct run r;
+	run_mvod(dir, src, &r);
+	poses_match_trajectory(&r, 20);
+	expect_tracking(&r, expect_start(&r) + 1, 10);
+	for (int i = 10; i < 12; i++) {
+		expect_pose(&r, i, MVOD_POSE_T_FRAME_FEW_FEATURES, MVOD_POSE_T_STATE_LOST,
+			    MVOD_POSE_T_SCALE_NONE);
+		assert_memory_equal(r.pose[i].position, r.pose[9].position, sizeof(r.pose[9].position));
+	}
+	assert_int_equal(r.pose[12].frame_status, MVOD_POSE_T_FRAME_MOTION);
+	assert_int_equal(r.pose[12].state, MVOD_POSE_T_STATE_TRACKING);
+	expect_tracking(&r, 13, 20);
+	state_changes_published(&r);
+	mvod_traj_free(&r.traj);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_forward),
+		cmocka_unit_test(test_static),
+		cmocka_unit_test(test_black_frames_lost_and_back),
+	};
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
+}
