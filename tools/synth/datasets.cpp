@@ -69,18 +69,20 @@ std::string numbers(const double *v, int n)
 
 } // namespace
 
-Pose euroc_body_to_camera()
-{
-	cv::Matx33d quarter, tilt;
-	cv::Rodrigues(cv::Vec3d(0, 0, CV_PI / 2), quarter);
-	cv::Rodrigues(cv::Vec3d(2 * CV_PI / 180, 0, 0), tilt);
-	return {quarter * tilt, cv::Vec3d(-0.0216, -0.0647, 0.0098)};
-}
-
 Pose dataset_from_world()
 {
 	// Columns: where mvod's x (right), y (down) and z (forward) point in a z-up world.
 	return {cv::Matx33d(0, 0, 1, -1, 0, 0, 0, -1, 0), cv::Vec3d(4.688, -1.786, 0.783)};
+}
+
+Pose euroc_body_to_camera()
+{
+	// Columns: where the camera's x (right), y (down) and z (forward) point in a
+	// forward-left-up body; then the camera tilted 2 degrees down about its x.
+	const cv::Matx33d flu = dataset_from_world().R;
+	cv::Matx33d tilt;
+	cv::Rodrigues(cv::Vec3d(-2 * CV_PI / 180, 0, 0), tilt);
+	return {flu * tilt, cv::Vec3d(-0.0216, -0.0647, 0.0098)};
 }
 
 DatasetWriter::DatasetWriter(Layout layout, const fs::path &dir, const Camera &cam, double fps) : layout_(layout)

@@ -21,9 +21,9 @@ constexpr int64_t kEurocStartNs = 1403636579763555584;
 // TUM's clock: microseconds from freiburg1_xyz's first colour frame (its files have 6 decimals).
 constexpr int64_t kTumStartUs = 1305031102175304;
 
-// T_BS, the camera in the body frame as EuRoC's sensor.yaml gives it: a quarter turn about the
-// body's z and 2 degrees about x, with a 7 cm lever arm, like EuRoC's cam0; so a body pose
-// taken for the camera's is far off.
+// T_BS, the camera in the body frame as EuRoC's sensor.yaml gives it: the camera's axes turned
+// into a forward-left-up body, tilted 2 degrees down, with a 7 cm lever arm (EuRoC's cam0 has
+// one like it); so a body pose taken for the camera's is metres off.
 Pose euroc_body_to_camera();
 // The dataset's world (EuRoC's and TUM's motion-capture frame) from mvod's: z up, x along the
 // first camera's view, moved away from the origin.

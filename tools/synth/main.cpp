@@ -50,9 +50,10 @@ Writes into DIR (created if missing; earlier outputs there are replaced):
   images/000000.png ...    8-bit grey PNG per frame, and images/times.txt (--format png)
   mav0/cam0/data.csv, data/NS.png, sensor.yaml, mav0/state_groundtruth_estimate0/data.csv
                            the EuRoC MAV layout (--format euroc): nanosecond times from
-                           1403636579763555584; sensor.yaml with the intrinsics and a T_BS of a
-                           quarter turn about z, 2 deg about x and a 7 cm lever arm; the ground
-                           truth as body poses (camera pose times T_BS^-1) in a z-up world
+                           1403636579763555584; sensor.yaml with the intrinsics and a T_BS
+                           taking the camera's axes to a forward-left-up body (tilted 2 deg, a
+                           7 cm lever arm); the ground truth as body poses (camera pose times
+                           T_BS^-1) in a z-up world
   rgb.txt, rgb/T.png, groundtruth.txt
                            the TUM RGB-D layout (--format tum): times from 1305031102.175304 s;
                            the ground truth as camera poses in the same z-up world
