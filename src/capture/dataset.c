@@ -1,6 +1,7 @@
 #include "capture/dataset.h"
 
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -78,6 +79,21 @@ int mvod_ds_parse_seconds(const char *s, const char **end, int64_t *ns)
 	return 0;
 }
 
+const char *mvod_ds_seconds(int64_t ns, char buf[24])
+{
+	snprintf(buf, 24, "%" PRId64 ".%09" PRId64, ns / 1000000000, ns % 1000000000);
+	return buf;
+}
+
+int mvod_ds_out_of_order(const char *path, size_t lineno, int64_t ns, int64_t prev,
+			 size_t prev_line, const char *what, char *err, size_t errlen)
+{
+	char a[24], b[24];
+	return mvod_errf(err, errlen, -EINVAL, "%s line %zu: time %s s is not after %s s of line "
+			 "%zu: the %s must be in time order", path, lineno, mvod_ds_seconds(ns, a),
+			 mvod_ds_seconds(prev, b), prev_line, what);
+}
+
 /* Appends "dir/name\0" to the text of f. */
 static int push_path(struct mvod_ds_frames *f, const char *dir, const char *name)
 {
@@ -114,9 +130,8 @@ int mvod_ds_frames_add(struct mvod_ds_frames *f, const char *index, size_t linen
 		       const char *dir, const char *name, int64_t ns, char *err, size_t errlen)
 {
 	if (f->n > 0 && ns <= f->ns[f->n - 1])
-		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: time %.9f s is not after "
-				 "%.9f s of line %zu: the frames must be in time order", index,
-				 lineno, ns / 1e9, f->ns[f->n - 1] / 1e9, f->last_line);
+		return mvod_ds_out_of_order(index, lineno, ns, f->ns[f->n - 1], f->last_line,
+					    "frames", err, errlen);
 	int ret = push_path(f, dir, name);
 	if (ret == 0)
 		ret = push_time(f, ns);

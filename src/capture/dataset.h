@@ -50,6 +50,12 @@ int mvod_ds_read_lines(const char *path, mvod_ds_line_fn fn, void *ctx, char *er
 int mvod_ds_parse_ns(const char *s, const char **end, int64_t *ns);
 int mvod_ds_parse_seconds(const char *s, const char **end, int64_t *ns);
 
+/* ns as seconds with all 9 decimals ("1403636579.763555584"), into buf; returns buf. */
+const char *mvod_ds_seconds(int64_t ns, char buf[24]);
+/* -EINVAL with "PATH line N: time T is not after T' of line N'" for frames or poses (what). */
+int mvod_ds_out_of_order(const char *path, size_t lineno, int64_t ns, int64_t prev,
+			 size_t prev_line, const char *what, char *err, size_t errlen);
+
 /* The frames an index names, gathered while it is read. Zero-initialise. */
 struct mvod_ds_frames {
 	char *text;        /* "dir/name\0" per frame */

@@ -52,9 +52,8 @@ static int add_line(void *ctx, char *line, size_t lineno, char *err, size_t errl
 		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not \"%s\"",
 				 ds->gt_path, lineno, line, ds->gt_layout);
 	if (g->n > 0 && ns <= g->ns[g->n - 1])
-		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: time %.9f s is not after "
-				 "%.9f s of line %zu: the poses must be in time order", ds->gt_path,
-				 lineno, ns / 1e9, g->ns[g->n - 1] / 1e9, g->last_line);
+		return mvod_ds_out_of_order(ds->gt_path, lineno, ns, g->ns[g->n - 1], g->last_line,
+					    "poses", err, errlen);
 	if (g->n == g->cap && grow(g) < 0)
 		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", ds->gt_path);
 	/* T_WC = T_WB T_BS: the camera's pose from the body's. */
@@ -130,14 +129,15 @@ static int resample(const struct samples *g, const struct mvod_dataset *ds, stru
 static int no_overlap(const struct samples *g, const struct mvod_dataset *ds, char *err,
 		      size_t errlen)
 {
-	size_t n = ds->images.n;
-	return mvod_errf(err, errlen, -ENODATA, "%s (lines %zu..%zu, t = %.6f .. %.6f s) has no "
-			 "pose for any frame of %s (lines %zu..%zu, t = %.6f .. %.6f s): the times "
-			 "do not overlap (a pose counts when one lies within 20 ms on each side); "
-			 "is it this sequence's ground truth?", ds->gt_path, g->first_line,
-			 g->last_line, g->ns[0] / 1e9, g->ns[g->n - 1] / 1e9, ds->index,
-			 ds->index_first, ds->index_last, ds->frame_ns[0] / 1e9,
-			 ds->frame_ns[n - 1] / 1e9);
+	char g0[24], g1[24], f0[24], f1[24];
+	return mvod_errf(err, errlen, -ENODATA, "%s (lines %zu..%zu, t = %s .. %s s) has no pose "
+			 "for any frame of %s (lines %zu..%zu, t = %s .. %s s): the times do not "
+			 "overlap (a pose counts when one lies within 20 ms on each side); is it "
+			 "this sequence's ground truth?", ds->gt_path, g->first_line, g->last_line,
+			 mvod_ds_seconds(g->ns[0], g0), mvod_ds_seconds(g->ns[g->n - 1], g1),
+			 ds->index, ds->index_first, ds->index_last,
+			 mvod_ds_seconds(ds->frame_ns[0], f0),
+			 mvod_ds_seconds(ds->frame_ns[ds->images.n - 1], f1));
 }
 
 int mvod_ds_ground_truth(void *priv, struct mvod_traj *gt, char *from, size_t fromlen,

@@ -334,6 +334,220 @@ static void test_tum_freiburg_defaults(void **state)
 	mvod_source_close(src);
 }
 
+/* --- bad input: one message naming the file and the line --- */
+
+/* "NS,NS.png" for frame i of the EuRoC rendering, then a newline. */
+static void euroc_row(char *buf, size_t len, int i)
+{
+	long long ns = EUROC_START_NS + (long long)i * PERIOD_US * 1000;
+	snprintf(buf, len, "%lld,%lld.png\n", ns, ns);
+}
+
+/*
+ * euroc:DIR for a sequence around the rendering's frames: sensor.yaml is the rendering's with
+ * from replaced by to (both NULL: as it is), data.csv is csv (NULL: the rendering's), and the
+ * ground truth gt (NULL: none).
+ */
+static const char *bad_euroc(const char *from, const char *to, const char *csv, const char *gt)
+{
+	static char uri[300];
+	const char *dir = tmp_path("bad_euroc");
+	char path[600], text[8192], target[300], *at;
+	snprintf(path, sizeof(path), "mkdir -p '%s/mav0/cam0' '%s/mav0/state_groundtruth_estimate0'",
+		 dir, dir);
+	assert_int_equal(system(path), 0);
+	snprintf(path, sizeof(path), "%s/mav0/cam0/data", dir);
+	snprintf(target, sizeof(target), "%s/mav0/cam0/data", euroc);
+	if (access(path, F_OK) != 0)
+		assert_int_equal(symlink(target, path), 0);
+	snprintf(path, sizeof(path), "%s/mav0/cam0/sensor.yaml", euroc);
+	harness_read_file(path, text, sizeof(text));
+	if (from && (at = strstr(text, from))) {
+		char rest[8192];
+		snprintf(rest, sizeof(rest), "%s", at + strlen(from));
+		snprintf(at, sizeof(text) - (size_t)(at - text), "%s%s", to, rest);
+	}
+	snprintf(path, sizeof(path), "%s/mav0/cam0/sensor.yaml", dir);
+	harness_write_file(path, text);
+	snprintf(path, sizeof(path), "%s/mav0/cam0/data.csv", euroc);
+	harness_read_file(path, text, sizeof(text));
+	snprintf(path, sizeof(path), "%s/mav0/cam0/data.csv", dir);
+	harness_write_file(path, csv ? csv : text);
+	snprintf(path, sizeof(path), "%s/mav0/state_groundtruth_estimate0/data.csv", dir);
+	unlink(path);
+	if (gt)
+		harness_write_file(path, gt);
+	snprintf(uri, sizeof(uri), "euroc:%s", dir);
+	return uri;
+}
+
+static void test_euroc_bad_frames(void **state)
+{
+	(void)state;
+	char csv[512] = "#timestamp [ns],filename\n", row[128];
+	euroc_row(row, sizeof(row), 0);
+	strcat(csv, row);
+	/* A row naming a file that is not there. */
+	char missing[512];
+	snprintf(missing, sizeof(missing), "%s%lld,missing.png\n", csv, EUROC_START_NS + 100000000LL);
+	harness_source_open_fails(bad_euroc(NULL, NULL, missing, NULL), -ENOENT,
+				  "data.csv line 3 names");
+	harness_source_open_fails(bad_euroc(NULL, NULL, missing, NULL), -ENOENT, "missing.png");
+	/* Time going backwards: frame 1's row, then frame 0's. */
+	char back[512] = "#timestamp [ns],filename\n";
+	euroc_row(row, sizeof(row), 1);
+	strcat(back, row);
+	euroc_row(row, sizeof(row), 0);
+	strcat(back, row);
+	harness_source_open_fails(bad_euroc(NULL, NULL, back, NULL), -EINVAL,
+				  "data.csv line 3: time 1403636579.763555584 s is not after "
+				  "1403636579.863555584 s of line 2");
+	/* Seconds where nanoseconds belong. */
+	harness_source_open_fails(bad_euroc(NULL, NULL, "1403636579.7635,x.png\n", NULL), -EINVAL,
+				  "data.csv line 1: \"1403636579.7635,x.png\" is not \"timestamp [ns],"
+				  "filename\"");
+}
+
+static void test_euroc_bad_sensor(void **state)
+{
+	(void)state;
+	/* Lines of mvod-synth's sensor.yaml: camera_model is on 14, distortion_model on 16. */
+	harness_source_open_fails(bad_euroc("camera_model: pinhole", "camera_model: omni", NULL,
+					    NULL),
+				  -EINVAL, "sensor.yaml line 14: camera_model \"omni\" is not one mvod "
+				  "reads (pinhole)");
+	harness_source_open_fails(bad_euroc("distortion_model: radial-tangential",
+					    "distortion_model: fov", NULL, NULL),
+				  -EINVAL, "sensor.yaml line 16: distortion_model \"fov\" is not one "
+				  "mvod reads (radial-tangential, equidistant)");
+	harness_source_open_fails(bad_euroc("sensor_type: camera", "sensor_type: imu", NULL, NULL),
+				  -EINVAL, "sensor.yaml line 2: sensor_type \"imu\" is no camera");
+	harness_source_open_fails(bad_euroc("intrinsics: [", "intrinsics: [1, ", NULL, NULL),
+				  -EINVAL, "sensor.yaml line 15: intrinsics [fu, fv, cu, cv] must be a "
+				  "list of 4 numbers");
+	harness_source_open_fails(bad_euroc("data: [", "data: [2, ", NULL, NULL), -EINVAL,
+				  "sensor.yaml line 9: T_BS data must be a list of 16 numbers");
+}
+
+/* The ground truth uri carries fails with code and a message holding needle. */
+static void expect_bad_gt(const char *uri, int code, const char *needle)
+{
+	struct mvod_source *src;
+	struct mvod_traj gt;
+	char err[1024] = "", from[4096];
+	if (mvod_source_open(uri, &src, err, sizeof(err)) != 0)
+		fail_msg("%s: %s", uri, err);
+	assert_int_equal(mvod_source_ground_truth(src, &gt, from, sizeof(from), err, sizeof(err)),
+			 code);
+	if (!strstr(err, needle))
+		fail_msg("\"%s\" does not say \"%s\"", err, needle);
+	mvod_source_close(src);
+}
+
+static void test_euroc_bad_ground_truth(void **state)
+{
+	(void)state;
+	/* Another sequence's: 7 minutes later than the frames. */
+	const char *later = "#timestamp,x,y,z,w,x,y,z\n"
+			    "1403637000000000000,0,0,0,1,0,0,0\n"
+			    "1403637000005000000,0,0,0,1,0,0,0\n";
+	const char *uri = bad_euroc(NULL, NULL, NULL, later);
+	expect_bad_gt(uri, -ENODATA, "data.csv (lines 2..3, t = 1403637000.000000000 .. "
+		      "1403637000.005000000 s) has no pose for any frame of");
+	expect_bad_gt(uri, -ENODATA, "cam0/data.csv (lines 2..21, t = 1403636579.763555584 .. "
+		      "1403636581.663555584 s)");
+	/* The binary says so and stops before any frame. */
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", (char *)uri, "--no-lcm", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	assert_int_equal(r.status, 1);
+	assert_non_null(strstr(r.err, "has no pose for any frame"));
+	expect_bad_gt(bad_euroc(NULL, NULL, NULL, "1403636579763555584,0,0,0,1,0,0,0\n"
+					   "1403636579763555583,0,0,0,1,0,0,0\n"),
+		      -EINVAL, "data.csv line 2: time 1403636579.763555583 s is not after "
+		      "1403636579.763555584 s of line 1: the poses must be in time order");
+	expect_bad_gt(bad_euroc(NULL, NULL, NULL, "1403636579763555584,0,0,0,1,0,0\n"), -EINVAL,
+		      "data.csv line 1: \"1403636579763555584,0,0,0,1,0,0\" is not \"timestamp "
+		      "[ns], p_RS_R x, y, z [m], q_RS w, x, y, z, ...\"");
+}
+
+static void test_tum_bad_input(void **state)
+{
+	(void)state;
+	const char *dir = tmp_path("bad_tum");
+	char path[600], uri[600];
+	assert_int_equal(mkdir(dir, 0755), 0);
+	snprintf(uri, sizeof(uri), "tum:%s", dir);
+	harness_source_open_fails(uri, -ENOENT, "has neither rgb.txt (RGB-D benchmark) nor "
+				  "times.txt (monoVO)");
+	snprintf(path, sizeof(path), "%s/rgb.txt", dir);
+	harness_write_file(path, "# timestamp filename\n1.0 ../tum/rgb/x.png\n1305031102,17 y\n");
+	harness_source_open_fails(uri, -ENOENT, "rgb.txt line 2 names");
+	harness_write_file(path, "# timestamp filename\n1305031102,17 rgb/a.png\n");
+	harness_source_open_fails(uri, -EINVAL, "rgb.txt line 2: \"1305031102,17 rgb/a.png\" is "
+				  "not \"timestamp filename\" (seconds)");
+	char text[256];
+	snprintf(text, sizeof(text), "1.5 ../tum/rgb/%lld.%06lld.png\n1.6 ../tum/rgb/%lld.%06lld.png\n",
+		 TUM_START_US / 1000000, TUM_START_US % 1000000,
+		 (TUM_START_US + PERIOD_US) / 1000000, (TUM_START_US + PERIOD_US) % 1000000);
+	harness_write_file(path, text);
+	snprintf(path, sizeof(path), "%s/groundtruth.txt", dir);
+	harness_write_file(path, "1.4 0 0 0 0 0 0 1\n1.3 0 0 0 0 0 0 1\n");
+	expect_bad_gt(uri, -EINVAL, "groundtruth.txt line 2: time 1.300000000 s is not after "
+		      "1.400000000 s of line 1");
+	harness_write_file(path, "1.4 0 0 0 0 0 1\n");
+	expect_bad_gt(uri, -EINVAL, "groundtruth.txt line 1: \"1.4 0 0 0 0 0 1\" is not "
+		      "\"timestamp tx ty tz qx qy qz qw\"");
+	/* Poses 40 ms apart around the frame: no interpolation across a gap. */
+	harness_write_file(path, "1.48 0 0 0 0 0 0 1\n1.52 0 0 0 0 0 0 1\n");
+	expect_bad_gt(uri, -ENODATA, "has no pose for any frame");
+	/*
+	 * Interpolated at the frames' times: at 1.5 s halfway from the origin to z = 1 and from
+	 * no turn to a quarter turn about z; at 1.6 s at z = 2 unturned. Relative to the first:
+	 * 1.5 m ahead, turned back 45 degrees.
+	 */
+	harness_write_file(path, "1.49 0 0 0 0 0 0 1\n1.51 0 0 1 0 0 0.70710678118654752 "
+			   "0.70710678118654752\n1.59 0 0 2 0 0 0 1\n1.61 0 0 2 0 0 0 1\n");
+	struct mvod_source *src;
+	struct mvod_traj gt;
+	char err[512], from[4096];
+	assert_int_equal(mvod_source_open(uri, &src, err, sizeof(err)), 0);
+	assert_int_equal(mvod_source_ground_truth(src, &gt, from, sizeof(from), err, sizeof(err)), 0);
+	assert_int_equal(gt.n, 2);
+	assert_true(gt.t[0] == 1.5 && gt.t[1] == 1.6);
+	const double ahead[3] = {0, 0, 1.5};
+	/* Bounds: a few roundings of numbers near 1 (1e-16 each). */
+	assert_true(mvod_vec3_dist(gt.pose[1].t, ahead) < 1e-12);
+	assert_true(fabs(mvod_rot_angle(gt.pose[1].R) * 180 / M_PI - 45) < 1e-9);
+	assert_true(gt.pose[1].R[1] > 0); /* R = Rz(-45 deg): its (0, 1) entry is +sin 45 */
+	mvod_traj_free(&gt);
+	mvod_source_close(src);
+}
+
+/* monoVO's FOV model has no equal in mvod: the run says so, naming it, and wants --calib. */
+static void test_tum_mono_fov_refused(void **state)
+{
+	(void)state;
+	const char *dir = tmp_path("fov");
+	char path[600], uri[600], images[300];
+	assert_int_equal(mkdir(dir, 0755), 0);
+	snprintf(images, sizeof(images), "%s/images", png);
+	snprintf(path, sizeof(path), "%s/images", dir);
+	assert_int_equal(symlink(images, path), 0);
+	snprintf(path, sizeof(path), "%s/times.txt", dir);
+	harness_write_file(path, "000000 0.0 10\n000001 0.1 10\n");
+	snprintf(path, sizeof(path), "%s/camera.txt", dir);
+	harness_write_file(path, "0.5 0.66 0.5 0.5 0.9\n320 240\ncrop\n320 240\n");
+	snprintf(uri, sizeof(uri), "tum:%s", dir);
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", uri, "--no-lcm", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	assert_int_equal(r.status, 1);
+	if (!strstr(r.err, "camera.txt line 1: camera model \"FOV\" with 5 numbers is not one "
+			   "mvod reads") || !strstr(r.err, "pass --calib FILE"))
+		fail_msg("%s", r.err);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -344,6 +558,11 @@ int main(void)
 		cmocka_unit_test(test_tum_ground_truth_is_the_camera),
 		cmocka_unit_test(test_kitti_ground_truth_beside),
 		cmocka_unit_test(test_tum_freiburg_defaults),
+		cmocka_unit_test(test_euroc_bad_frames),
+		cmocka_unit_test(test_euroc_bad_sensor),
+		cmocka_unit_test(test_euroc_bad_ground_truth),
+		cmocka_unit_test(test_tum_bad_input),
+		cmocka_unit_test(test_tum_mono_fov_refused),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
