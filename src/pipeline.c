@@ -44,6 +44,8 @@ struct run {
 	struct mvod_camera cam;
 	struct mvod_traj gt;
 	char gt_from[PATH_MAX]; /* the ground truth's file: --gt, or the one the dataset carries */
+	bool gt_from_source;    /* the dataset's: frames before it begins are skipped when needed */
+	int64_t skipped_lead;   /* frames skipped so */
 	struct mvod_vo *vo;
 	struct mvod_traj_writer *traj;
 	struct mvod_ipc *ipc;
@@ -131,6 +133,7 @@ static int open_gt(struct run *r)
 	} else {
 		ret = mvod_source_ground_truth(r->src, &r->gt, r->gt_from, sizeof(r->gt_from), err,
 					       sizeof(err));
+		r->gt_from_source = ret == 0;
 		if (ret == 0)
 			LOG(INFO, "ground truth: %s (%d poses), which %s carries; --gt FILE "
 				  "overrides", r->gt_from, r->gt.n, o->source);
@@ -361,10 +364,27 @@ static void log_missing_gt(const struct run *r, const struct mvod_frame *f)
 	    (long long)f->index, f->utime / 1e6, r->gt_from, r->gt.t[0], r->gt.t[r->gt.n - 1], why);
 }
 
+/*
+ * A dataset's ground truth often begins after its camera (EuRoC's by a second or so): a run
+ * that needs a pose for every frame starts at the first frame that has one.
+ */
+static bool before_dataset_gt(struct run *r, const struct mvod_frame *f)
+{
+	if (!r->gt_from_source || r->sum->frames > 0 || f->utime / 1e6 >= r->gt.t[0])
+		return false;
+	if (r->skipped_lead++ == 0)
+		LOG(INFO, "frame %lld (t = %.6f s) comes before the ground truth %s begins (t = "
+			  "%.6f s): the frames before it are skipped", (long long)f->index,
+		    f->utime / 1e6, r->gt_from, r->gt.t[0]);
+	return true;
+}
+
 static int process_frame(struct run *r, const struct mvod_frame *f, double capture_ms)
 {
 	const struct mvod_pose *gt = gt_for(r, f);
 	if ((r->o->vo.scale_mode == MVOD_SCALE_MODE_GT || r->o->require_gt) && !gt) {
+		if (before_dataset_gt(r, f))
+			return 0;
 		log_missing_gt(r, f);
 		return -ENOENT;
 	}

@@ -524,6 +524,33 @@ static void test_tum_bad_input(void **state)
 	mvod_source_close(src);
 }
 
+/* EuRoC's ground truth begins after its camera: a bench starts at the first frame with a pose. */
+static void test_euroc_bench_gt_begins_later(void **state)
+{
+	(void)state;
+	char path[300], text[65536];
+	snprintf(path, sizeof(path), "%s/mav0/state_groundtruth_estimate0/data.csv", euroc);
+	harness_read_file(path, text, sizeof(text));
+	const char *from = text;
+	for (int i = 0; i < 4; i++) /* the header and the poses of frames 0..2 */
+		from = strchr(from, '\n') + 1;
+	const char *uri = bad_euroc(NULL, NULL, NULL, from);
+	const char *csv = tmp_path("later.csv");
+	char *argv[] = {(char *)harness_bin("MVOD"), "bench", "--source", (char *)uri, "--scale", "gt",
+			"--csv", (char *)csv, NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (r.status != 0 || !strstr(r.err, "frame 0 (t = 1403636579.763556 s) comes before the "
+					    "ground truth"))
+		fail_msg("mvod bench (%d): %s", r.status, r.err);
+	harness_read_file(csv, text, sizeof(text));
+	/* The frames column (7th) of the one row: frames 3..19. */
+	const char *row = strchr(text, '\n') + 1;
+	for (int c = 0; c < 6; c++)
+		row = strchr(row, ',') + 1;
+	assert_int_equal(atoi(row), FRAMES - 3);
+}
+
 /* monoVO's FOV model has no equal in mvod: the run says so, naming it, and wants --calib. */
 static void test_tum_mono_fov_refused(void **state)
 {
@@ -563,6 +590,7 @@ int main(void)
 		cmocka_unit_test(test_euroc_bad_ground_truth),
 		cmocka_unit_test(test_tum_bad_input),
 		cmocka_unit_test(test_tum_mono_fov_refused),
+		cmocka_unit_test(test_euroc_bench_gt_begins_later),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
