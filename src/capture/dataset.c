@@ -94,6 +94,30 @@ int mvod_ds_out_of_order(const char *path, size_t lineno, int64_t ns, int64_t pr
 			 mvod_ds_seconds(prev, b), prev_line, what);
 }
 
+int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p)
+{
+	double v[7];
+	for (int k = 0; k < 7; k++) {
+		const char *before = s;
+		s += strspn(s, " \t");
+		if (sep == ' ' ? s == before : *s++ != sep)
+			return -EINVAL;
+		char *end;
+		v[k] = strtod(s, &end);
+		if (end == s || !isfinite(v[k]))
+			return -EINVAL;
+		s = end;
+	}
+	s += strspn(s, " \t");
+	if (*s && (sep == ' ' || *s != sep))
+		return -EINVAL;
+	memcpy(p->t, v, sizeof(p->t));
+	const double q[4] = {w_first ? v[3] : v[6], v[w_first ? 4 : 3], v[w_first ? 5 : 4],
+			     v[w_first ? 6 : 5]};
+	mvod_quat_to_rot(q, p->R);
+	return 0;
+}
+
 /* Appends "dir/name\0" to the text of f. */
 static int push_path(struct mvod_ds_frames *f, const char *dir, const char *name)
 {

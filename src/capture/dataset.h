@@ -50,6 +50,12 @@ int mvod_ds_read_lines(const char *path, mvod_ds_line_fn fn, void *ctx, char *er
 int mvod_ds_parse_ns(const char *s, const char **end, int64_t *ns);
 int mvod_ds_parse_seconds(const char *s, const char **end, int64_t *ns);
 
+/*
+ * The 7 numbers of a pose after a line's time: "tx ty tz" in metres, then a unit quaternion,
+ * w x y z (w_first, EuRoC) or x y z w (TUM); each after sep, ',' (more columns may follow) or
+ * ' ' (whitespace; nothing may follow). -EINVAL when s is not that.
+ */
+int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p);
 /* ns as seconds with all 9 decimals ("1403636579.763555584"), into buf; returns buf. */
 const char *mvod_ds_seconds(int64_t ns, char buf[24]);
 /* -EINVAL with "PATH line N: time T is not after T' of line N'" for frames or poses (what). */

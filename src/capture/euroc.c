@@ -8,9 +8,7 @@
 
 #include <errno.h>
 #include <limits.h>
-#include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
@@ -80,25 +78,9 @@ static int add_frame(void *ctx, char *line, size_t lineno, char *err, size_t err
 static int gt_line(const char *line, int64_t *ns, struct mvod_pose *body)
 {
 	const char *s;
-	double v[7];
 	if (mvod_ds_parse_ns(line, &s, ns) < 0)
 		return -EINVAL;
-	for (int k = 0; k < 7; k++) {
-		s += strspn(s, " \t");
-		if (*s++ != ',')
-			return -EINVAL;
-		char *end;
-		v[k] = strtod(s, &end);
-		if (end == s || !isfinite(v[k]))
-			return -EINVAL;
-		s = end;
-	}
-	s += strspn(s, " \t");
-	if (*s && *s != ',')
-		return -EINVAL;
-	memcpy(body->t, v, sizeof(body->t));
-	mvod_quat_to_rot(v + 3, body->R); /* w x y z, mvod's order */
-	return 0;
+	return mvod_ds_parse_pose(s, ',', true, body);
 }
 
 static int euroc_open(void *priv, const char *location, char *err, size_t errlen)

@@ -86,22 +86,9 @@ static int add_rgb(void *ctx, char *line, size_t lineno, char *err, size_t errle
 static int gt_line(const char *line, int64_t *ns, struct mvod_pose *cam)
 {
 	const char *s;
-	double v[7];
 	if (mvod_ds_parse_seconds(line, &s, ns) < 0)
 		return -EINVAL;
-	for (int k = 0; k < 7; k++) {
-		char *end;
-		v[k] = strtod(s, &end);
-		if (end == s || !isfinite(v[k]) || (*s != ' ' && *s != '\t'))
-			return -EINVAL;
-		s = end;
-	}
-	if (s[strspn(s, " \t")])
-		return -EINVAL;
-	memcpy(cam->t, v, sizeof(cam->t));
-	double q[4] = {v[6], v[3], v[4], v[5]}; /* w x y z from qx qy qz qw */
-	mvod_quat_to_rot(q, cam->R);
-	return 0;
+	return mvod_ds_parse_pose(s, ' ', false, cam);
 }
 
 static int open_rgbd(struct tum *t, char *err, size_t errlen)

@@ -32,15 +32,6 @@
 
 static char png[256], euroc[256], tum[256];
 
-static const char *tmp_path(const char *name)
-{
-	static char path[8][512];
-	static int k;
-	char *p = path[k++ % 8];
-	snprintf(p, 512, "%s/%s", harness_tmpdir(), name);
-	return p;
-}
-
 static void synth(const char *dir, const char *format)
 {
 	harness_synth(dir, "turn", FRAMES, format, "--size", "320x240", "--distortion",
@@ -50,9 +41,9 @@ static void synth(const char *dir, const char *format)
 static int setup(void **state)
 {
 	(void)state;
-	snprintf(png, sizeof(png), "%s", tmp_path("png"));
-	snprintf(euroc, sizeof(euroc), "%s", tmp_path("euroc"));
-	snprintf(tum, sizeof(tum), "%s", tmp_path("tum"));
+	snprintf(png, sizeof(png), "%s", harness_tmp_path("png"));
+	snprintf(euroc, sizeof(euroc), "%s", harness_tmp_path("euroc"));
+	snprintf(tum, sizeof(tum), "%s", harness_tmp_path("tum"));
 	synth(png, "png");
 	synth(euroc, "euroc");
 	synth(tum, "tum");
@@ -88,7 +79,7 @@ static void expect_same_as_images(const char *source, const char *calib, const c
 	snprintf(out_png, sizeof(out_png), "%s/est.tum", png);
 	if (access(out_png, F_OK) != 0)
 		run_to(images, calib_png, out_png);
-	const char *out = tmp_path(name);
+	const char *out = harness_tmp_path(name);
 	run_to(source, calib, out);
 	static char a[65536], b[65536];
 	harness_read_file(out, a, sizeof(a));
@@ -138,7 +129,7 @@ static void test_tum_same_as_images(void **state)
 static void test_tum_mono_same_as_images(void **state)
 {
 	(void)state;
-	const char *dir = tmp_path("mono");
+	const char *dir = harness_tmp_path("mono");
 	char path[600], images[300], text[4096] = "", calib_png[300];
 	assert_int_equal(mkdir(dir, 0755), 0);
 	snprintf(images, sizeof(images), "%s/images", png);
@@ -269,7 +260,7 @@ static void test_kitti_ground_truth_beside(void **state)
 {
 	(void)state;
 	char seq[600], path[1400], text[512], gt_kitti[300], images[300];
-	snprintf(seq, sizeof(seq), "%s/sequences/00", tmp_path("kitti"));
+	snprintf(seq, sizeof(seq), "%s/sequences/00", harness_tmp_path("kitti"));
 	snprintf(path, sizeof(path), "mkdir -p '%s' '%s/../../poses'", seq, seq);
 	assert_int_equal(system(path), 0);
 	snprintf(images, sizeof(images), "%s/images", png);
@@ -310,7 +301,7 @@ static void test_kitti_ground_truth_beside(void **state)
 static void test_tum_freiburg_defaults(void **state)
 {
 	(void)state;
-	const char *dir = tmp_path("rgbd_dataset_freiburg1_synth");
+	const char *dir = harness_tmp_path("rgbd_dataset_freiburg1_synth");
 	char path[600], text[256], uri[600];
 	assert_int_equal(mkdir(dir, 0755), 0);
 	snprintf(text, sizeof(text), "# timestamp filename\n1.0 ../tum/rgb/%lld.%06lld.png\n",
@@ -351,7 +342,7 @@ static void euroc_row(char *buf, size_t len, int i)
 static const char *bad_euroc(const char *from, const char *to, const char *csv, const char *gt)
 {
 	static char uri[300];
-	const char *dir = tmp_path("bad_euroc");
+	const char *dir = harness_tmp_path("bad_euroc");
 	char path[600], text[8192], target[300], *at;
 	snprintf(path, sizeof(path), "mkdir -p '%s/mav0/cam0' '%s/mav0/state_groundtruth_estimate0'",
 		 dir, dir);
@@ -474,7 +465,7 @@ static void test_euroc_bad_ground_truth(void **state)
 static void test_tum_bad_input(void **state)
 {
 	(void)state;
-	const char *dir = tmp_path("bad_tum");
+	const char *dir = harness_tmp_path("bad_tum");
 	char path[600], uri[600];
 	assert_int_equal(mkdir(dir, 0755), 0);
 	snprintf(uri, sizeof(uri), "tum:%s", dir);
@@ -535,7 +526,7 @@ static void test_euroc_bench_gt_begins_later(void **state)
 	for (int i = 0; i < 4; i++) /* the header and the poses of frames 0..2 */
 		from = strchr(from, '\n') + 1;
 	const char *uri = bad_euroc(NULL, NULL, NULL, from);
-	const char *csv = tmp_path("later.csv");
+	const char *csv = harness_tmp_path("later.csv");
 	char *argv[] = {(char *)harness_bin("MVOD"), "bench", "--source", (char *)uri, "--scale", "gt",
 			"--csv", (char *)csv, NULL};
 	struct run_result r;
@@ -555,7 +546,7 @@ static void test_euroc_bench_gt_begins_later(void **state)
 static void test_tum_mono_fov_refused(void **state)
 {
 	(void)state;
-	const char *dir = tmp_path("fov");
+	const char *dir = harness_tmp_path("fov");
 	char path[600], uri[600], images[300];
 	assert_int_equal(mkdir(dir, 0755), 0);
 	snprintf(images, sizeof(images), "%s/images", png);
