@@ -126,8 +126,9 @@ static int add_mono(void *ctx, char *line, size_t lineno, char *err, size_t errl
 	const char *end;
 	int64_t ns;
 	if (idlen == 0 || idlen > 32 || mvod_ds_parse_seconds(id + idlen, &end, &ns) < 0)
-		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not \"id "
-				 "timestamp [exposure]\" (seconds)", x->path, lineno, line);
+		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not TUM monoVO's "
+				 "\"id timestamp [exposure]\" (seconds); images with one time per "
+				 "line are images:DIR", x->path, lineno, line);
 	char path[PATH_MAX];
 	snprintf(name, sizeof(name), "images/%.*s.jpg", (int)idlen, id);
 	snprintf(path, sizeof(path), "%s/%s", x->dir, name);
