@@ -1,5 +1,6 @@
 #include "capture/dataset.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <inttypes.h>
 #include <math.h>
@@ -7,6 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+static_assert(offsetof(struct mvod_dataset, images) == 0, "the images ops take the dataset priv");
 
 int mvod_ds_read_lines(const char *path, mvod_ds_line_fn fn, void *ctx, char *err,
 		       size_t errlen)
@@ -188,7 +191,7 @@ static char **pack_paths(const struct mvod_ds_frames *f)
 /* ns to the microseconds of struct mvod_frame, to the nearest (times are not negative). */
 static int64_t ns_to_us(int64_t ns)
 {
-	return (ns + 500) / 1000;
+	return ns / 1000 + (ns % 1000 >= 500); /* not (ns + 500) / 1000: no overflow at the end */
 }
 
 int mvod_ds_open_frames(struct mvod_dataset *ds, struct mvod_ds_frames *f, char *err,
