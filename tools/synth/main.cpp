@@ -104,8 +104,8 @@ Options:
                          (default 0)
   --seed N               seed for the world, its textures and the noise (default 1)
   --format mkv|png|euroc|tum
-                         output format (default mkv); euroc and tum take a radial-tangential
-                         lens of 4 coefficients (euroc, tum) or --fisheye (euroc)
+                         output format (default mkv); euroc's sensor.yaml holds a
+                         radial-tangential lens of 4 coefficients, or --fisheye
 
 Calibration target (--board):
   --board SPEC           charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT (COLSxROWS squares) or
