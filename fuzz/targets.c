@@ -13,6 +13,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include "capture/euroc.h"
 #include "capture/uri.h"
 #include "mvod/board.h"
 #include "mvod/calib.h"
@@ -102,6 +103,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	ret = mvod_calib_load(as_file(data, size), &cam, err, sizeof(err));
 #endif
 	check_camera(ret, &cam);
+#elif defined(FUZZ_EUROC_SENSOR)
+	/* A EuRoC sensor.yaml: a camera, and T_BS a rotation (det 1) with a finite translation. */
+	struct mvod_camera cam;
+	struct mvod_pose bs;
+	ret = mvod_euroc_sensor_load(as_file(data, size), &cam, &bs, err, sizeof(err));
+	check_camera(ret, &cam);
+	if (!ret)
+		assert(fabs(mvod_mat3_det(bs.R) - 1) < 1e-5 && isfinite(bs.t[0] + bs.t[1] + bs.t[2]));
 #elif defined(FUZZ_TRAJ)
 	struct mvod_traj t;
 	ret = mvod_traj_load(as_file(data, size), &t, err, sizeof(err));

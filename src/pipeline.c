@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,6 +43,9 @@ struct run {
 	struct mvod_source_info info;
 	struct mvod_camera cam;
 	struct mvod_traj gt;
+	char gt_from[PATH_MAX]; /* the ground truth's file: --gt, or the one the dataset carries */
+	bool gt_from_source;    /* the dataset's: frames before it begins are skipped when needed */
+	int64_t skipped_lead;   /* frames skipped so */
 	struct mvod_vo *vo;
 	struct mvod_traj_writer *traj;
 	struct mvod_ipc *ipc;
@@ -117,6 +121,37 @@ static int open_camera(struct run *r)
 	return 0;
 }
 
+/* --gt FILE, or else the ground truth the dataset carries (KITTI poses/, EuRoC, TUM). */
+static int open_gt(struct run *r)
+{
+	char err[512] = "";
+	const struct mvod_run_opts *o = r->o;
+	int ret;
+	if (o->gt) {
+		snprintf(r->gt_from, sizeof(r->gt_from), "%s", o->gt);
+		ret = mvod_traj_load(o->gt, &r->gt, err, sizeof(err));
+	} else {
+		ret = mvod_source_ground_truth(r->src, &r->gt, r->gt_from, sizeof(r->gt_from), err,
+					       sizeof(err));
+		r->gt_from_source = ret == 0;
+		if (ret == 0)
+			LOG(INFO, "ground truth: %s (%d poses), which %s carries; --gt FILE "
+				  "overrides", r->gt_from, r->gt.n, o->source);
+		if (ret == -ENOENT) /* the source carries none */
+			ret = 0;
+	}
+	if (ret) {
+		LOG(ERROR, "ground truth: %s", err);
+		return ret;
+	}
+	if (!r->gt.n && (o->vo.scale_mode == MVOD_SCALE_MODE_GT || o->require_gt)) {
+		LOG(ERROR, "%s needs a ground-truth trajectory and %s carries none: pass --gt FILE",
+		    o->require_gt ? "benchmarking" : "--scale gt", o->source);
+		return -EINVAL;
+	}
+	return 0;
+}
+
 static int open_inputs(struct run *r)
 {
 	char err[512] = "";
@@ -130,16 +165,9 @@ static int open_inputs(struct run *r)
 	ret = open_camera(r);
 	if (ret)
 		return ret;
-	if (o->gt) {
-		ret = mvod_traj_load(o->gt, &r->gt, err, sizeof(err));
-		if (ret) {
-			LOG(ERROR, "ground truth: %s", err);
-			return ret;
-		}
-	} else if (o->vo.scale_mode == MVOD_SCALE_MODE_GT) {
-		LOG(ERROR, "--scale gt needs a ground-truth trajectory: pass --gt FILE");
-		return -EINVAL;
-	}
+	ret = open_gt(r);
+	if (ret)
+		return ret;
 	ret = mvod_vo_create(&o->vo, &r->cam, &r->vo);
 	if (ret)
 		LOG(ERROR, "cannot set up visual odometry for %dx%d: %s", r->cam.width,
@@ -327,19 +355,36 @@ static void log_missing_gt(const struct run *r, const struct mvod_frame *f)
 		LOG(ERROR, "ground truth %s has %d poses (KITTI, one per frame) but %s has more frames: "
 			   "frame %lld has none, and %s needs every frame; pass --max-frames %d or "
 			   "the ground truth of this sequence",
-		    r->o->gt, r->gt.n, r->o->source, (long long)f->index, why, r->gt.n);
+		    r->gt_from, r->gt.n, r->o->source, (long long)f->index, why, r->gt.n);
 		return;
 	}
 	LOG(ERROR, "frame %lld (t = %.6f s) has no pose within 5 ms in ground truth %s, whose "
 		   "poses span t = %.6f .. %.6f s: the clocks differ or the file has a gap; %s needs "
 		   "every frame",
-	    (long long)f->index, f->utime / 1e6, r->o->gt, r->gt.t[0], r->gt.t[r->gt.n - 1], why);
+	    (long long)f->index, f->utime / 1e6, r->gt_from, r->gt.t[0], r->gt.t[r->gt.n - 1], why);
+}
+
+/*
+ * A dataset's ground truth often begins after its camera (EuRoC's by a second or so): a run
+ * that needs a pose for every frame starts at the first frame that has one.
+ */
+static bool before_dataset_gt(struct run *r, const struct mvod_frame *f)
+{
+	if (!r->gt_from_source || r->sum->frames > 0 || f->utime / 1e6 >= r->gt.t[0])
+		return false;
+	if (r->skipped_lead++ == 0)
+		LOG(INFO, "frame %lld (t = %.6f s) comes before the ground truth %s begins (t = "
+			  "%.6f s): the frames before it are skipped", (long long)f->index,
+		    f->utime / 1e6, r->gt_from, r->gt.t[0]);
+	return true;
 }
 
 static int process_frame(struct run *r, const struct mvod_frame *f, double capture_ms)
 {
 	const struct mvod_pose *gt = gt_for(r, f);
 	if ((r->o->vo.scale_mode == MVOD_SCALE_MODE_GT || r->o->require_gt) && !gt) {
+		if (before_dataset_gt(r, f))
+			return 0;
 		log_missing_gt(r, f);
 		return -ENOENT;
 	}

@@ -1,5 +1,5 @@
 /*
- * Frame sources, chosen by URI scheme (file:, images:, kitti:, v4l2:, libcamera:). Each
+ * Frame sources, chosen by URI scheme (file:, images:, kitti:, euroc:, tum:, v4l2:, libcamera:). Each
  * backend is a const struct mvod_source_ops, the way LCM picks a provider from its URL.
  */
 #ifndef MVOD_CAPTURE_H
@@ -12,6 +12,7 @@
 
 #include "mvod/calib.h"
 #include "mvod/image.h"
+#include "mvod/traj.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -53,6 +54,12 @@ struct mvod_source_ops {
 	void (*info)(void *priv, struct mvod_source_info *info);
 	/* Intrinsics the source carries (KITTI calib.txt); -ENOENT when it has none. May be NULL. */
 	int (*camera)(void *priv, struct mvod_camera *cam);
+	/*
+	 * Ground truth the dataset carries (see mvod_source_ground_truth); -ENOENT when it has
+	 * none. May be NULL.
+	 */
+	int (*ground_truth)(void *priv, struct mvod_traj *gt, char *from, size_t fromlen, char *err,
+			    size_t errlen);
 	void (*close)(void *priv);
 };
 
@@ -69,6 +76,19 @@ int mvod_source_read_into(struct mvod_source *src, struct mvod_frame *frame,
 			  const struct mvod_image *into);
 void mvod_source_info(struct mvod_source *src, struct mvod_source_info *info);
 int mvod_source_camera(struct mvod_source *src, struct mvod_camera *cam);
+/*
+ * The ground truth of a dataset source, for a run given no --gt: camera-to-world poses of this
+ * source's camera, world = the camera frame of the first frame that has a pose (mvod's own
+ * world), metres; KITTI's poses/NN.txt as it is (one pose per frame), EuRoC and TUM resampled
+ * at the frames' own times (TUM format, t = utime / 1e6, so that a frame finds its pose
+ * exactly). The file it came from goes into from. -ENOENT when the source has none (err
+ * untouched); other -errno with a reason naming the file in err. gt is freed with
+ * mvod_traj_free.
+ */
+int mvod_source_ground_truth(struct mvod_source *src, struct mvod_traj *gt, char *from,
+			     size_t fromlen, char *err, size_t errlen);
+/* True when uri's scheme may carry its own ground truth (kitti:, euroc:, tum:). */
+bool mvod_source_may_have_gt(const char *uri);
 /* Closes and frees; NULL is a no-op. */
 void mvod_source_close(struct mvod_source *src);
 

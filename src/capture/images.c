@@ -251,6 +251,18 @@ static double times_fps(const int64_t *t, size_t n)
 	return (double)(n - 1) * 1e6 / (double)(t[n - 1] - t[0]);
 }
 
+/* What every way of opening ends with: the first image decoded, info filled in. */
+static int start(struct mvod_images *im, char *err, size_t errlen)
+{
+	int ret = load_first(im, err, errlen);
+	if (ret < 0)
+		return ret;
+	im->info.frames = (int64_t)im->n;
+	im->info.focus = NAN;
+	im->info.fps = im->times_us ? times_fps(im->times_us, im->n) : 1e6 / DEFAULT_PERIOD_US;
+	return 0;
+}
+
 int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_path, char *err,
 		     size_t errlen)
 {
@@ -260,17 +272,26 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
 	ret = load_times(im, times_path, err, errlen);
 	if (ret < 0 && ret != -ENOENT)
 		goto fail;
-	ret = load_first(im, err, errlen);
+	ret = start(im, err, errlen);
 	if (ret < 0)
 		goto fail;
-	im->info.frames = (int64_t)im->n;
-	im->info.focus = NAN;
-	im->info.fps = im->times_us ? times_fps(im->times_us, im->n) : 1e6 / DEFAULT_PERIOD_US;
 	if (!im->times_us)
 		LOG(WARN, "%s not found: timestamps assume 10 Hz", times_path);
 	return 0;
 fail:
 	mvod_images_close(im);
+	return ret;
+}
+
+int mvod_images_open_list(struct mvod_images *im, char **paths, size_t n, int64_t *times_us,
+			  char *err, size_t errlen)
+{
+	im->paths = paths;
+	im->n = n;
+	im->times_us = times_us;
+	int ret = start(im, err, errlen);
+	if (ret < 0)
+		mvod_images_close(im);
 	return ret;
 }
 

@@ -30,6 +30,13 @@ struct mvod_images {
 int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_path, char *err,
 		     size_t errlen);
 /*
+ * The same on a list another index made (a dataset's data.csv, rgb.txt): im takes paths (one
+ * allocation, as in struct mvod_images) and times_us (n entries, malloc'ed) in any case. im
+ * must be zeroed; on failure it is left released and err says why.
+ */
+int mvod_images_open_list(struct mvod_images *im, char **paths, size_t n, int64_t *times_us,
+			  char *err, size_t errlen);
+/*
  * The ops on an open struct mvod_images (priv), shared by every backend built on it. read
  * gives -EINVAL for an image it cannot read or decode, and the next read goes on after it.
  */

@@ -2,17 +2,43 @@
 #include "capture/backends.h"
 
 #include <assert.h>
+#include <errno.h>
 #include <limits.h>
 #include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #include "capture/images.h"
 
 struct kitti {
 	struct mvod_images images; /* first, so the images ops work on a kitti priv as is */
 	struct mvod_camera cam;    /* P0, with the size of the images */
+	char gt_path[PATH_MAX];    /* ROOT/poses/NN.txt for ROOT/sequences/NN, or "" */
 };
 
 static_assert(offsetof(struct kitti, images) == 0, "the images ops take the kitti priv");
+
+/* SEQDIR = ROOT/sequences/NN: the ground truth is ROOT/poses/NN.txt, when it is there. */
+static void find_poses(const char *seqdir, char *gt, size_t len)
+{
+	char real[PATH_MAX];
+	gt[0] = '\0';
+	if (!realpath(seqdir, real))
+		return;
+	char *nn = strrchr(real, '/');
+	if (!nn || nn == real)
+		return;
+	*nn++ = '\0';
+	char *sequences = strrchr(real, '/');
+	if (!sequences || strcmp(sequences, "/sequences") != 0)
+		return;
+	*sequences = '\0';
+	int n = snprintf(gt, len, "%s/poses/%s.txt", real, nn);
+	if (n < 0 || (size_t)n >= len || access(gt, F_OK) != 0)
+		gt[0] = '\0';
+}
 
 static int kitti_open(void *priv, const char *seqdir, char *err, size_t errlen)
 {
@@ -32,6 +58,7 @@ static int kitti_open(void *priv, const char *seqdir, char *err, size_t errlen)
 		return ret;
 	k->cam.width = k->images.info.width;
 	k->cam.height = k->images.info.height;
+	find_poses(seqdir, k->gt_path, sizeof(k->gt_path));
 	return 0;
 }
 
@@ -42,13 +69,25 @@ static int kitti_camera(void *priv, struct mvod_camera *cam)
 	return 0;
 }
 
+static int kitti_ground_truth(void *priv, struct mvod_traj *gt, char *from, size_t fromlen,
+			      char *err, size_t errlen)
+{
+	const struct kitti *k = priv;
+	if (!k->gt_path[0])
+		return -ENOENT;
+	snprintf(from, fromlen, "%s", k->gt_path);
+	return mvod_traj_load(k->gt_path, gt, err, errlen);
+}
+
 const struct mvod_source_ops mvod_source_kitti_ops = {
 	.scheme = "kitti",
-	.summary = "kitti:SEQDIR  KITTI odometry sequence: image_0/, times.txt, calib.txt (P0)",
+	.summary = "kitti:SEQDIR  KITTI odometry sequence: image_0/, times.txt, calib.txt (P0); "
+		   "ground truth from ../../poses/NN.txt",
 	.priv_size = sizeof(struct kitti),
 	.open = kitti_open,
 	.read = mvod_images_read,
 	.info = mvod_images_info,
 	.camera = kitti_camera,
+	.ground_truth = kitti_ground_truth,
 	.close = mvod_images_close,
 };

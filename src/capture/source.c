@@ -15,6 +15,8 @@ const struct mvod_source_ops *const mvod_source_backends[] = {
 	&mvod_source_file_ops,
 	&mvod_source_images_ops,
 	&mvod_source_kitti_ops,
+	&mvod_source_euroc_ops,
+	&mvod_source_tum_ops,
 	&mvod_source_v4l2_ops,
 	&mvod_source_libcamera_ops,
 	NULL,
@@ -114,6 +116,13 @@ fail:
 	return ret;
 }
 
+bool mvod_source_may_have_gt(const char *uri)
+{
+	const char *location;
+	const struct mvod_source_ops *ops = find_backend(uri, &location);
+	return ops && ops->ground_truth;
+}
+
 int mvod_source_read(struct mvod_source *src, struct mvod_frame *frame)
 {
 	return mvod_source_read_into(src, frame, NULL);
@@ -139,6 +148,14 @@ int mvod_source_camera(struct mvod_source *src, struct mvod_camera *cam)
 	if (!src->ops->camera)
 		return -ENOENT;
 	return src->ops->camera(src->priv, cam);
+}
+
+int mvod_source_ground_truth(struct mvod_source *src, struct mvod_traj *gt, char *from,
+			     size_t fromlen, char *err, size_t errlen)
+{
+	if (!src->ops->ground_truth)
+		return -ENOENT;
+	return src->ops->ground_truth(src->priv, gt, from, fromlen, err, errlen);
 }
 
 void mvod_source_close(struct mvod_source *src)

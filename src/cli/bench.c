@@ -14,6 +14,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "mvod/capture.h"
 #include "mvod/eval.h"
 #include "mvod/log.h"
 #include "mvod/pipeline.h"
@@ -38,14 +39,15 @@ static const char default_grid[] =
 static void usage(FILE *out)
 {
 	fprintf(out,
-"Usage: mvod bench --source URI --gt FILE [options] [--sweep [GRID]]\n"
+"Usage: mvod bench --source URI [--gt FILE] [options] [--sweep [GRID]]\n"
 "Runs the pipeline (no LCM) against ground truth and prints one table row per configuration:\n"
 "detector, matcher, feature cap, image scale, blur, ratio; err_avg and err_max (issue 5's\n"
 "per-frame e = (r + d) / (0.5 + r + d)), RPE (rotation deg, direction deg, translation %%),\n"
 "ATE (m and %% of the path; SE(3)-aligned with --scale gt, Sim(3) with auto), scale drift,\n"
 "KITTI t_rel (%%) and r_rel (deg/100 m) on paths over 100 m, fps, median and 95th\n"
 "percentile frame time and the mean milliseconds of each stage. Every frame needs a\n"
-"ground-truth pose.\n"
+"ground-truth pose: from --gt FILE, or else from the dataset (kitti: with poses/NN.txt\n"
+"beside sequences/NN, euroc:, tum: RGB-D with groundtruth.txt).\n"
 "\n");
 	cli_usage_input(out);
 	cli_usage_vo(out);
@@ -70,6 +72,8 @@ static void usage(FILE *out)
 	cli_usage_general(out);
 	fprintf(out,
 "Examples:\n"
+"  mvod bench --source kitti:data/sequences/07 --scale gt    (data/poses/07.txt)\n"
+"  mvod bench --source euroc:MH_01_easy --scale gt\n"
 "  mvod bench --source kitti:data/sequences/07 --gt data/poses/07.txt --scale gt \\\n"
 "       --detector sift --matcher flann-ratio --ratio 0.6 --plots out/\n"
 "  mvod bench --source kitti:data/sequences/07 --gt data/poses/07.txt --scale gt \\\n"
@@ -311,9 +315,11 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 		return ret;
 	mvod_config_finish(&b->cfg);
 	mvod_config_apply_log(&b->cfg);
-	if (!b->cfg.run.source || !b->cfg.run.gt) {
-		fprintf(stderr, "%s: --source URI and --gt FILE are required, e.g. --source "
-				"kitti:SEQDIR --gt poses.txt; see %s --help\n", cli_prog, cli_prog);
+	/* A dataset may carry its ground truth; whether this one does, opening it tells. */
+	if (!b->cfg.run.source || (!b->cfg.run.gt && !mvod_source_may_have_gt(b->cfg.run.source))) {
+		fprintf(stderr, "%s: --source URI and --gt FILE are required (kitti:, euroc: and "
+				"tum: sequences may carry their own), e.g. --source kitti:SEQDIR --gt "
+				"poses.txt; see %s --help\n", cli_prog, cli_prog);
 		return -EINVAL;
 	}
 	b->cfg.run.require_gt = 1;

@@ -53,6 +53,15 @@ const char *harness_tmpdir(void)
 	return tmpdir;
 }
 
+const char *harness_tmp_path(const char *name)
+{
+	static char path[8][512];
+	static int k;
+	char *p = path[k++ % 8];
+	snprintf(p, sizeof(path[0]), "%s/%s", harness_tmpdir(), name);
+	return p;
+}
+
 void harness_cleanup(void)
 {
 	if (!tmpdir[0])

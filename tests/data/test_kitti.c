@@ -14,6 +14,7 @@
 #include <cmocka.h>
 
 #include "harness.h"
+#include "mvod/capture.h"
 
 struct clip {
 	const char *seq;
@@ -64,6 +65,28 @@ static void test_kitti_07(void **state)
 	run_clip(&(struct clip){"07", 160, 0.2, 5, 6});
 }
 
+/* The clip in the standard layout: kitti: finds poses/07.txt beside sequences/07 itself. */
+static void test_kitti_07_own_ground_truth(void **state)
+{
+	(void)state;
+	const char *data = getenv("MVOD_DATA");
+	char uri[600], gt_path[600], from[4096], err[512];
+	snprintf(uri, sizeof(uri), "kitti:%s/kitti-odometry-07-clip/sequences/07", data);
+	snprintf(gt_path, sizeof(gt_path), "%s/kitti-odometry-07-clip/poses/07.txt", data);
+	struct mvod_source *src;
+	struct mvod_traj gt, want;
+	assert_int_equal(mvod_source_open(uri, &src, err, sizeof(err)), 0);
+	assert_int_equal(mvod_source_ground_truth(src, &gt, from, sizeof(from), err, sizeof(err)), 0);
+	assert_non_null(strstr(from, "kitti-odometry-07-clip/poses/07.txt"));
+	assert_int_equal(mvod_traj_load(gt_path, &want, err, sizeof(err)), 0);
+	assert_int_equal(gt.n, 160);
+	assert_int_equal(want.n, 160);
+	assert_memory_equal(gt.pose, want.pose, sizeof(*gt.pose) * 160);
+	mvod_traj_free(&gt);
+	mvod_traj_free(&want);
+	mvod_source_close(src);
+}
+
 int main(void)
 {
 	const char *data = getenv("MVOD_DATA");
@@ -75,6 +98,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_kitti_06),
 		cmocka_unit_test(test_kitti_07),
+		cmocka_unit_test(test_kitti_07_own_ground_truth),
 	};
 	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }

@@ -33,15 +33,6 @@ static int setup(void **state)
 	return 0;
 }
 
-static const char *tmp_path(const char *name)
-{
-	static char path[4][300];
-	static int k;
-	char *p = path[k++ % 4];
-	snprintf(p, 300, "%s/%s", harness_tmpdir(), name);
-	return p;
-}
-
 /* mvod bench on the sequence with gt and the given extra arguments (NULL-terminated). */
 static void bench(struct run_result *r, const char *gt, ...)
 {
@@ -107,7 +98,7 @@ static int count_substr(const char *s, const char *needle)
 static void test_one_configuration(void **state)
 {
 	(void)state;
-	const char *csv = tmp_path("one.csv"), *md = tmp_path("one.md"), *plots = tmp_path("plots");
+	const char *csv = harness_tmp_path("one.csv"), *md = harness_tmp_path("one.md"), *plots = harness_tmp_path("plots");
 	struct run_result r;
 	bench(&r, gt_tum, "--scale", "gt", "--csv", csv, "--report", md, "--plots", plots, NULL);
 	if (r.status != 0)
@@ -161,7 +152,7 @@ static void test_one_configuration(void **state)
 static void test_sweep_two_configurations(void **state)
 {
 	(void)state;
-	const char *csv = tmp_path("sweep.csv"), *md = tmp_path("sweep.md");
+	const char *csv = harness_tmp_path("sweep.csv"), *md = harness_tmp_path("sweep.md");
 	struct run_result r;
 	bench(&r, gt_kitti, "--scale", "gt", "--features", "500", "--sweep",
 	      "detector=orb;matcher=bf-cross,bf-ratio", "--csv", csv, "--report", md, NULL);
@@ -189,7 +180,7 @@ static void test_sweep_two_configurations(void **state)
 
 static const char *write_file(const char *name, const char *text)
 {
-	const char *p = tmp_path(name);
+	const char *p = harness_tmp_path(name);
 	harness_write_file(p, text);
 	return p;
 }
@@ -214,7 +205,7 @@ static const char *head_of(const char *src, const char *name, int n, void (*edit
 /* Expects exit 1, needles on stderr, and no CSV written. */
 static void expect_bad_gt(const char *gt, const char *needle1, const char *needle2)
 {
-	const char *csv = tmp_path("bad.csv");
+	const char *csv = harness_tmp_path("bad.csv");
 	unlink(csv);
 	struct run_result r;
 	bench(&r, gt, "--csv", csv, NULL);
@@ -285,7 +276,7 @@ static void test_bad_usage(void **state)
 static void test_table_reader_gone(void **state)
 {
 	(void)state;
-	const char *csv = tmp_path("gone.csv"), *err_path = tmp_path("gone.err");
+	const char *csv = harness_tmp_path("gone.csv"), *err_path = harness_tmp_path("gone.err");
 	char err[8192];
 	unlink(csv);
 	char *argv[] = {(char *)harness_bin("MVOD"), "bench", "--source", video, "--calib", calib,

@@ -2,6 +2,7 @@
 // so that mvod's visual odometry and calibration can be tested against known answers.
 
 #include "board.hpp"
+#include "datasets.hpp"
 #include "failure.hpp"
 #include "paths.hpp"
 #include "render.hpp"
@@ -28,6 +29,7 @@ extern "C" {
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,6 +48,15 @@ The same arguments and seed always give identical frames.
 Writes into DIR (created if missing; earlier outputs there are replaced):
   video.mkv                lossless FFV1 8-bit grey video (--format mkv)
   images/000000.png ...    8-bit grey PNG per frame, and images/times.txt (--format png)
+  mav0/cam0/data.csv, data/NS.png, sensor.yaml, mav0/state_groundtruth_estimate0/data.csv
+                           the EuRoC MAV layout (--format euroc): nanosecond times from
+                           1403636579763555584; sensor.yaml with the intrinsics and a T_BS
+                           taking the camera's axes to a forward-left-up body (tilted 2 deg, a
+                           7 cm lever arm); the ground truth as body poses (camera pose times
+                           T_BS^-1) in a z-up world
+  rgb.txt, rgb/T.png, groundtruth.txt
+                           the TUM RGB-D layout (--format tum): times from 1305031102.175304 s;
+                           the ground truth as camera poses in the same z-up world
   times.txt                timestamp of every frame in seconds, one per line
   gt.tum, gt.kitti         camera-to-world pose of every frame (OpenCV axes: x right, y down,
                            z forward; metres; for built-in paths the first camera is the world)
@@ -95,7 +106,9 @@ Options:
   --blur SIGMA           Gaussian blur, standard deviation in pixels, applied before the noise
                          (default 0)
   --seed N               seed for the world, its textures and the noise (default 1)
-  --format mkv|png       output format (default mkv)
+  --format mkv|png|euroc|tum
+                         output format (default mkv); euroc's sensor.yaml holds a
+                         radial-tangential lens of 4 coefficients, or --fisheye
 
 Calibration target (--board):
   --board SPEC           charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT (COLSxROWS squares) or
@@ -129,6 +142,7 @@ struct Options {
 	double noise = 0, blur = 0;
 	uint64_t seed = 1;
 	bool png = false;
+	std::string format = "mkv";
 	double speed = 1.0;
 	std::string board; // empty: the street
 	int views = 60;
@@ -281,9 +295,10 @@ Options parse_options(int argc, char **argv)
 		case BLUR: o.blur = parse_non_negative(name, optarg); break;
 		case SEED: o.seed = parse_unsigned(name, optarg); break;
 		case FORMAT:
-			if (std::strcmp(optarg, "mkv") != 0 && std::strcmp(optarg, "png") != 0)
-				usage_error(std::string("--format: '") + optarg + "' is neither mkv nor png");
-			o.png = std::strcmp(optarg, "png") == 0;
+			o.format = optarg;
+			if (o.format != "mkv" && o.format != "png" && o.format != "euroc" && o.format != "tum")
+				usage_error(std::string("--format: '") + optarg + "' is none of mkv, png, euroc, tum");
+			o.png = o.format == "png";
 			break;
 		case SPEED:
 			o.speed = parse_positive(name, optarg);
@@ -348,13 +363,16 @@ public:
 							    (ec ? ec.message() : "not a directory"));
 		if (png_)
 			remove_old_frames();
+		if (o.format == "euroc" || o.format == "tum")
+			dataset_ = std::make_unique<DatasetWriter>(o.format == "euroc" ? Layout::Euroc : Layout::Tum,
+								   dir_, cam, o.fps);
 		save_calibration(cam, command_line);
 		open_trajectory("gt.tum", MVOD_TRAJ_TUM, &tum_);
 		open_trajectory("gt.kitti", MVOD_TRAJ_KITTI, &kitti_);
 		open_times(dir_ / "times.txt", times_);
 		if (png_) {
 			open_times(dir_ / "images" / "times.txt", image_times_);
-		} else {
+		} else if (!dataset_) {
 			const fs::path video = dir_ / "video.mkv";
 			if (!video_.open(video.string(), cv::CAP_FFMPEG, cv::VideoWriter::fourcc('F', 'F', 'V', '1'), o.fps,
 					 cv::Size(cam.width, cam.height), false))
@@ -377,6 +395,8 @@ public:
 			const fs::path file = dir_ / "images" / name;
 			if (!cv::imwrite(file.string(), image))
 				throw Failure(kExitFailure, "cannot write " + file.string());
+		} else if (dataset_) {
+			dataset_->add(t, pose, image);
 		} else {
 			video_.write(image);
 		}
@@ -398,6 +418,8 @@ public:
 	void close()
 	{
 		video_.release();
+		if (dataset_)
+			dataset_->close();
 		close_times(dir_ / "times.txt", times_);
 		if (png_)
 			close_times(dir_ / "images" / "times.txt", image_times_);
@@ -500,6 +522,7 @@ private:
 	bool png_;
 	std::string board_;
 	cv::VideoWriter video_;
+	std::unique_ptr<DatasetWriter> dataset_; // --format euroc or tum
 	std::ofstream times_, image_times_;
 	mvod_traj_writer *tum_ = nullptr, *kitti_ = nullptr;
 	int frames_ = 0;

@@ -1,0 +1,88 @@
+/*
+ * The dataset sources' text parsers: timestamps read exactly into int64 nanoseconds (a double
+ * holds 1.4e18 ns only to 256 ns), and the pose columns of EuRoC and TUM ground truth.
+ */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "capture/dataset.h"
+
+static void test_parse_ns(void **state)
+{
+	(void)state;
+	const char *end;
+	int64_t ns;
+	/* EuRoC's 19 digits, to the last one. */
+	assert_int_equal(mvod_ds_parse_ns("1403636579763555584,x.png", &end, &ns), 0);
+	assert_true(ns == 1403636579763555584LL);
+	assert_string_equal(end, ",x.png");
+	assert_int_equal(mvod_ds_parse_ns(" 9223372036854775807", &end, &ns), 0);
+	assert_true(ns == INT64_MAX);
+	/* One more is past int64; so is a 20th digit; no digit, or a sign, is no time. */
+	assert_int_equal(mvod_ds_parse_ns("9223372036854775808", &end, &ns), -EINVAL);
+	assert_int_equal(mvod_ds_parse_ns("14036365797635555840", &end, &ns), -EINVAL);
+	assert_int_equal(mvod_ds_parse_ns(",x.png", &end, &ns), -EINVAL);
+	assert_int_equal(mvod_ds_parse_ns("-1", &end, &ns), -EINVAL);
+}
+
+static void test_parse_seconds(void **state)
+{
+	(void)state;
+	const char *end;
+	int64_t ns;
+	assert_int_equal(mvod_ds_parse_seconds("1305031102.175304 rgb/a.png", &end, &ns), 0);
+	assert_true(ns == 1305031102175304000LL);
+	assert_string_equal(end, " rgb/a.png");
+	/* Nanoseconds exactly; digits below them dropped, not rounded into a carry. */
+	assert_int_equal(mvod_ds_parse_seconds("1403636579.7635555849999", &end, &ns), 0);
+	assert_true(ns == 1403636579763555584LL);
+	assert_string_equal(end, "");
+	assert_int_equal(mvod_ds_parse_seconds("12", &end, &ns), 0);
+	assert_true(ns == 12000000000LL);
+	assert_int_equal(mvod_ds_parse_seconds("0.5", &end, &ns), 0);
+	assert_true(ns == 500000000);
+	/* Past the year 2262 int64 nanoseconds end; signs and exponents are no TUM times. */
+	assert_int_equal(mvod_ds_parse_seconds("9223372036.0", &end, &ns), -EINVAL);
+	assert_int_equal(mvod_ds_parse_seconds("-1.5", &end, &ns), -EINVAL);
+	assert_int_equal(mvod_ds_parse_seconds(".5", &end, &ns), -EINVAL);
+	assert_int_equal(mvod_ds_parse_seconds("1e9", &end, &ns), 0);
+	assert_string_equal(end, "e9"); /* the caller sees what follows and refuses it */
+}
+
+static void test_parse_pose(void **state)
+{
+	(void)state;
+	struct mvod_pose p;
+	/* EuRoC: w first, comma-separated, velocities and biases may follow. */
+	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0,1,9,9,9", ',', true, &p), 0);
+	assert_true(p.t[0] == 1 && p.t[1] == 2 && p.t[2] == 3);
+	/* q = (w 0, z 1): a half turn about z. */
+	assert_true(fabs(p.R[0] + 1) < 1e-15 && fabs(p.R[4] + 1) < 1e-15 && p.R[8] == 1);
+	/* TUM: w last, whitespace, nothing after. */
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1", ' ', false, &p), 0);
+	assert_true(p.R[0] == 1 && p.R[4] == 1 && p.R[8] == 1);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1 5", ' ', false, &p), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0", ' ', false, &p), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0", ',', true, &p), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(",1,2,nan,0,0,0,1", ',', true, &p), -EINVAL);
+	/* The separator must be there: "1.4,0" is no TUM line, "1 2" no EuRoC one. */
+	assert_int_equal(mvod_ds_parse_pose(",1 2 3 0 0 0 1", ' ', false, &p), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1", ',', true, &p), -EINVAL);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_parse_ns),
+		cmocka_unit_test(test_parse_seconds),
+		cmocka_unit_test(test_parse_pose),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
