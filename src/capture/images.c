@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "mvod/log.h"
+#include "util/output.h"
 
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
@@ -251,10 +252,22 @@ static double times_fps(const int64_t *t, size_t n)
 	return (double)(n - 1) * 1e6 / (double)(t[n - 1] - t[0]);
 }
 
+/* Every frame and times.txt are inputs: no output of this process may be one (util/output.h). */
+static int note_inputs(const struct mvod_images *im, const char *times_path, char *err,
+		       size_t errlen)
+{
+	int ret = mvod_input_note(times_path);
+	for (size_t i = 0; i < im->n && !ret; i++)
+		ret = mvod_input_note(im->paths[i]);
+	return ret ? mvod_errf(err, errlen, ret, "%s: %s", times_path, strerror(-ret)) : 0;
+}
+
 int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_path, char *err,
 		     size_t errlen)
 {
 	int ret = list_images(im, dir, err, errlen);
+	if (ret >= 0)
+		ret = note_inputs(im, times_path, err, errlen);
 	if (ret < 0)
 		goto fail;
 	ret = load_times(im, times_path, err, errlen);

@@ -191,7 +191,7 @@ int mvod_cmd_calibrate(int argc, char **argv)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	cli_quiet_libraries();
 	/* Found out now, not after an hour of video. */
-	if (cli_check_writable("out", c.out) || (c.o.report && cli_check_writable("report", c.o.report)))
+	if (cli_check_writable("--out", c.out) || (c.o.report && cli_check_writable("--report", c.o.report)))
 		return EXIT_FAILURE;
 	/*
 	 * A live camera never ends: the first Ctrl-C ends the recording and calibrates on it;

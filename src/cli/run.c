@@ -199,7 +199,6 @@ static int print_config(const struct mvod_config *cfg)
 
 static int run(struct mvod_config *cfg)
 {
-	install_signals();
 	mvod_notify_init();
 	struct mvod_ipc *ipc = NULL;
 	if (cfg->lcm_enabled &&
@@ -220,6 +219,11 @@ static int run(struct mvod_config *cfg)
 
 int mvod_cmd_run(int argc, char **argv)
 {
+	/*
+	 * First of all: a SIGHUP (log rotation) or SIGTERM in the first fraction of a second, while
+	 * the configuration, libraries and source load, must not kill mvod by default action.
+	 */
+	install_signals();
 	struct cli c = {0};
 	struct mvod_config cfg;
 	mvod_config_default(&cfg);

@@ -323,7 +323,7 @@ int mvod_cmd_view(int argc, char **argv)
 	int ret = parse_cli(argc, argv, &c);
 	if (ret)
 		return ret > 0 ? 0 : EXIT_USAGE;
-	if (c.png && cli_check_writable("png", c.png))
+	if (c.png && cli_check_writable("--png", c.png))
 		return EXIT_FAILURE;
 	/* No SA_RESTART: the signal interrupts LCM's wait at once. */
 	struct sigaction sa = {.sa_handler = on_signal};
