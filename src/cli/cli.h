@@ -26,6 +26,9 @@ int cli_parse_board(const char *s, struct mvod_board *b);
  * not a directory, block device, socket or input noted so far, in a folder that can be written
  * in. Prints the reason and returns -errno when not.
  */
+/* mvod run's SIGINT, SIGTERM (stop) and SIGHUP (reopen) handlers; idempotent. */
+void cli_run_install_signals(void);
+
 int cli_check_writable(const char *opt, const char *path);
 
 /* Leaves FFmpeg's and libcamera's own diagnostics for --log-level debug: mvod says what to do. */
