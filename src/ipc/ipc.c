@@ -21,7 +21,7 @@ struct mvod_ipc {
 	void *send_ctx;
 	lcm_t *lcm;                /* owned when owns_lcm */
 	bool owns_lcm;
-	char *log_path;            /* file://PATH?mode=w: opened by mvod_ipc_open_log, owned */
+	char *log_url, *log_path;  /* file://PATH?mode=w: opened by mvod_ipc_open_log, owned */
 	struct mvod_lcm_log *log;
 	uint8_t *pose_buf, *status_buf;
 	int pose_len, status_len;
@@ -106,8 +106,8 @@ int mvod_ipc_create_with(mvod_ipc_send_fn send, void *ctx, const char *pose_chan
 }
 
 /* A file:// log LCM would write: mvod's own writer, opened later by mvod_ipc_open_log. */
-static int create_log(const char *path, const char *pose_channel, const char *status_channel,
-		      struct mvod_ipc **out)
+static int create_log(const char *url, const char *path, const char *pose_channel,
+		      const char *status_channel, struct mvod_ipc **out)
 {
 	struct mvod_ipc *ipc = NULL;
 	int ret = mvod_ipc_create_with(log_send, NULL, pose_channel, status_channel, &ipc);
@@ -115,7 +115,8 @@ static int create_log(const char *path, const char *pose_channel, const char *st
 		return ret;
 	ipc->send_ctx = ipc;
 	ipc->log_path = strdup(path);
-	if (!ipc->log_path) {
+	ipc->log_url = strdup(url);
+	if (!ipc->log_path || !ipc->log_url) {
 		mvod_ipc_destroy(ipc);
 		return -ENOMEM;
 	}
@@ -131,9 +132,10 @@ int mvod_ipc_create(const char *url, const char *pose_channel, const char *statu
 	if (!out)
 		return -EINVAL;
 	/* LCM_DEFAULT_URL too: a file:// log named there is written by mvod as well. */
-	int ret = mvod_lcm_log_url_path(url ? url : getenv("LCM_DEFAULT_URL"), path, sizeof(path));
+	const char *u = url ? url : getenv("LCM_DEFAULT_URL");
+	int ret = mvod_lcm_log_url_path(u, path, sizeof(path));
 	if (ret != -ENOENT)
-		return ret ? ret : create_log(path, pose_channel, status_channel, out);
+		return ret ? ret : create_log(u, path, pose_channel, status_channel, out);
 	/* A NULL url makes lcm_create consult LCM_DEFAULT_URL, then fall back to its default. */
 	lcm_t *lcm = lcm_create(url);
 	if (!lcm)
@@ -159,7 +161,9 @@ int mvod_ipc_open_log(struct mvod_ipc *ipc, char *err, size_t errlen)
 			      ? strlen(ipc->pose_channel)
 			      : strlen(ipc->status_channel);
 	size_t msg = (size_t)(ipc->pose_len > ipc->status_len ? ipc->pose_len : ipc->status_len);
-	return mvod_lcm_log_open(ipc->log_path, chan + msg, &ipc->log, err, errlen);
+	char what[4200];
+	snprintf(what, sizeof(what), "--lcm-url %s: LCM log", ipc->log_url);
+	return mvod_lcm_log_open(what, ipc->log_path, chan + msg, &ipc->log, err, errlen);
 }
 
 int mvod_ipc_finish(struct mvod_ipc *ipc)
@@ -184,6 +188,7 @@ void mvod_ipc_destroy(struct mvod_ipc *ipc)
 	if (ipc->owns_lcm)
 		lcm_destroy(ipc->lcm);
 	free(ipc->log_path);
+	free(ipc->log_url);
 	free(ipc);
 }
 

@@ -35,15 +35,15 @@ int mvod_lcm_log_url_path(const char *url, char *path, size_t len)
 	return plen > 0 && (size_t)snprintf(path, len, "%.*s", plen, p) < len ? 0 : -ENAMETOOLONG;
 }
 
-int mvod_lcm_log_open(const char *path, size_t max_event, struct mvod_lcm_log **out, char *err,
-		      size_t errlen)
+int mvod_lcm_log_open(const char *what, const char *path, size_t max_event,
+		      struct mvod_lcm_log **out, char *err, size_t errlen)
 {
 	size_t cap = MVOD_LCM_LOG_HEADER + max_event;
 	struct mvod_lcm_log *log = calloc(1, sizeof(*log) + cap);
 	if (!log)
 		return -ENOMEM;
 	log->cap = cap;
-	int ret = mvod_output_open("LCM log", path, &log->out, err, errlen);
+	int ret = mvod_output_open(what, path, &log->out, err, errlen);
 	if (ret) {
 		free(log);
 		return ret;

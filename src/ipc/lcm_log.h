@@ -20,11 +20,11 @@ struct mvod_lcm_log;
 int mvod_lcm_log_url_path(const char *url, char *path, size_t len);
 /*
  * Opens path through the output policy (util/output.h: locked, truncated only at the first
- * event). max_event: the largest channel name plus message, in bytes; the one event buffer is
- * allocated here. Returns 0 or -errno with a reason in err.
+ * event); what names it in messages. max_event: the largest channel name plus message, in
+ * bytes; the one event buffer is allocated here. Returns 0 or -errno with a reason in err.
  */
-int mvod_lcm_log_open(const char *path, size_t max_event, struct mvod_lcm_log **out, char *err,
-		      size_t errlen);
+int mvod_lcm_log_open(const char *what, const char *path, size_t max_event,
+		      struct mvod_lcm_log **out, char *err, size_t errlen);
 /*
  * Appends one event (channel, data, now as its time) with one write(2): LCM's format, all
  * big-endian: u32 sync 0xEDA1DA01, i64 event number from 0, i64 microseconds since the epoch,

@@ -15,69 +15,71 @@
 
 /* --- inputs, by device and inode --- */
 
-struct file_id {
+struct input {
 	dev_t dev;
 	ino_t ino;
+	char *path; /* owned: to tell the input from a later file that reuses its inode */
 };
 
 /*
- * Grown by doubling while sources and files open (a KITTI folder notes ~5 000 frames, 80 KiB),
- * never per frame. The lock is for a live source reopened by its capture thread.
+ * Grown by doubling while sources and files open (a KITTI folder notes ~5 000 frames), never
+ * per frame. The lock is for a live source reopened by its capture thread.
  */
 static struct {
 	pthread_mutex_t lock;
-	struct file_id *ids;
+	struct input *in;
 	size_t n, cap;
 } inputs = {.lock = PTHREAD_MUTEX_INITIALIZER};
-
-static int note(const struct stat *st)
-{
-	int ret = 0;
-	pthread_mutex_lock(&inputs.lock);
-	if (inputs.n == inputs.cap) {
-		size_t cap = inputs.cap ? 2 * inputs.cap : 64;
-		struct file_id *ids = realloc(inputs.ids, cap * sizeof(*ids));
-		if (ids) {
-			inputs.ids = ids;
-			inputs.cap = cap;
-		}
-		ret = ids ? 0 : -ENOMEM;
-	}
-	if (!ret)
-		inputs.ids[inputs.n++] = (struct file_id){st->st_dev, st->st_ino};
-	pthread_mutex_unlock(&inputs.lock);
-	return ret;
-}
 
 int mvod_input_note(const char *path)
 {
 	struct stat st;
 	if (stat(path, &st) != 0)
 		return errno == ENOENT || errno == ENOTDIR ? 0 : -errno;
-	return note(&st);
-}
-
-int mvod_input_note_fd(int fd)
-{
-	struct stat st;
-	return fstat(fd, &st) == 0 ? note(&st) : -errno;
+	char *copy = strdup(path);
+	int ret = copy ? 0 : -ENOMEM;
+	pthread_mutex_lock(&inputs.lock);
+	if (!ret && inputs.n == inputs.cap) {
+		size_t cap = inputs.cap ? 2 * inputs.cap : 64;
+		struct input *in = realloc(inputs.in, cap * sizeof(*in));
+		if (in) {
+			inputs.in = in;
+			inputs.cap = cap;
+		}
+		ret = in ? 0 : -ENOMEM;
+	}
+	if (!ret)
+		inputs.in[inputs.n++] = (struct input){st.st_dev, st.st_ino, copy};
+	pthread_mutex_unlock(&inputs.lock);
+	if (ret)
+		free(copy);
+	return ret;
 }
 
 void mvod_inputs_forget(void)
 {
 	pthread_mutex_lock(&inputs.lock);
-	free(inputs.ids);
-	inputs.ids = NULL;
+	for (size_t i = 0; i < inputs.n; i++)
+		free(inputs.in[i].path);
+	free(inputs.in);
+	inputs.in = NULL;
 	inputs.n = inputs.cap = 0;
 	pthread_mutex_unlock(&inputs.lock);
 }
 
+/*
+ * The same device and inode as an input whose name still leads to it: a file deleted after it
+ * was read may give its inode number to a new file, which is no input.
+ */
 static bool is_input(const struct stat *st)
 {
 	bool found = false;
+	struct stat now;
 	pthread_mutex_lock(&inputs.lock);
 	for (size_t i = 0; i < inputs.n && !found; i++)
-		found = inputs.ids[i].dev == st->st_dev && inputs.ids[i].ino == st->st_ino;
+		found = inputs.in[i].dev == st->st_dev && inputs.in[i].ino == st->st_ino &&
+			stat(inputs.in[i].path, &now) == 0 && now.st_dev == st->st_dev &&
+			now.st_ino == st->st_ino;
 	pthread_mutex_unlock(&inputs.lock);
 	return found;
 }
@@ -147,19 +149,40 @@ static int folder_writable(const char *what, const char *path, const char *targe
 			 strerror(-ret));
 }
 
+/*
+ * Where to write: what the path reaches through every link, magic ones too (/dev/stdout is
+ * /proc/self/fd/1, whose link text "pipe:[N]" names no file), decides the kind. Only a regular
+ * file, replaced by rename, needs its name resolved; the resolved name must be that file.
+ */
+static int find_target(const char *path, char *target, size_t len, struct stat *st, bool *exists)
+{
+	*exists = stat(path, st) == 0;
+	if (!*exists && errno != ENOENT)
+		return -errno;
+	if (*exists && !S_ISREG(st->st_mode))
+		return (size_t)snprintf(target, len, "%s", path) < len ? 0 : -ENAMETOOLONG;
+	int ret = resolve(path, target, len);
+	struct stat resolved;
+	if (!ret && *exists && (stat(target, &resolved) != 0 || resolved.st_ino != st->st_ino ||
+				resolved.st_dev != st->st_dev))
+		ret = -ELOOP;
+	return ret;
+}
+
 int mvod_output_check(const char *what, const char *path, char *target, size_t targetlen,
 		      enum mvod_output_kind *kind, char *err, size_t errlen)
 {
 	enum mvod_output_kind k = MVOD_OUTPUT_NEW;
-	int ret = resolve(path, target, targetlen);
-	if (ret)
+	struct stat st;
+	bool exists;
+	int ret = find_target(path, target, targetlen, &st, &exists);
+	if (ret == -ELOOP || ret == -ENAMETOOLONG)
 		return mvod_errf(err, errlen, ret, "%s %s: cannot follow the symlink: %s", what, path,
 				 strerror(-ret));
-	struct stat st;
-	if (stat(target, &st) == 0)
+	if (ret)
+		return mvod_errf(err, errlen, ret, "%s %s: %s", what, path, strerror(-ret));
+	if (exists)
 		ret = kind_of(what, path, &st, &k, err, errlen);
-	else if (errno != ENOENT)
-		ret = mvod_errf(err, errlen, -errno, "%s %s: %s", what, path, strerror(errno));
 	if (!ret && (k == MVOD_OUTPUT_NEW || k == MVOD_OUTPUT_REGULAR))
 		ret = folder_writable(what, path, target, err, errlen);
 	if (kind)
@@ -174,7 +197,9 @@ struct mvod_output {
 	int error;             /* the first failure, returned again at close */
 	bool regular;          /* a file: locked, truncated, cut back, fsynced */
 	bool truncate_pending; /* the run before's records stay until this run writes one */
+	bool created;          /* by this open: removed again if no record ever came */
 	char *what, *path;     /* in storage, for reopening and messages */
+	char target[PATH_MAX]; /* the file path resolved to */
 	char storage[];
 };
 
@@ -194,22 +219,28 @@ static int open_failed(const char *what, const char *path, int e, char *err, siz
  * stays non-blocking: a record up to PIPE_BUF goes in whole or fails with EAGAIN, so a reader
  * that stops reading is a write failure, never a loop stuck without a watchdog ping.
  */
-static int open_locked(const char *what, const char *path, int *fd, bool *regular, char *err,
+static int open_locked(const char *what, const char *path, struct mvod_output *o, char *err,
 		       size_t errlen)
 {
-	char target[PATH_MAX];
 	enum mvod_output_kind k;
-	int ret = mvod_output_check(what, path, target, sizeof(target), &k, err, errlen);
+	int ret = mvod_output_check(what, path, o->target, sizeof(o->target), &k, err, errlen);
 	if (ret)
 		return ret;
-	*regular = k == MVOD_OUTPUT_NEW || k == MVOD_OUTPUT_REGULAR;
+	o->regular = k == MVOD_OUTPUT_NEW || k == MVOD_OUTPUT_REGULAR;
 	int flags = O_WRONLY | O_CLOEXEC | O_NOCTTY | (k == MVOD_OUTPUT_FIFO ? O_NONBLOCK : 0) |
-		    (*regular ? O_CREAT | O_APPEND : 0);
-	*fd = open(target, flags, 0644);
+		    (o->regular ? O_APPEND : 0);
+	int *fd = &o->fd;
+	/* O_EXCL first: a file that was not there is known as ours, to remove if left empty. */
+	*fd = o->regular ? open(o->target, flags | O_CREAT | O_EXCL, 0644) : -1;
+	o->created = *fd >= 0;
+	if (*fd < 0)
+		*fd = open(o->target, flags, 0644);
 	if (*fd < 0)
 		return open_failed(what, path, errno, err, errlen);
-	if (*regular && flock(*fd, LOCK_EX | LOCK_NB) != 0) {
+	if (o->regular && flock(*fd, LOCK_EX | LOCK_NB) != 0) {
 		int e = errno;
+		if (o->created)
+			unlink(o->target);
 		close(*fd);
 		return open_failed(what, path, e, err, errlen);
 	}
@@ -225,7 +256,7 @@ int mvod_output_open(const char *what, const char *path, struct mvod_output **ou
 		return mvod_errf(err, errlen, -ENOMEM, "%s %s: out of memory", what, path);
 	o->what = memcpy(o->storage, what, wl);
 	o->path = memcpy(o->storage + wl, path, pl);
-	int ret = open_locked(what, path, &o->fd, &o->regular, err, errlen);
+	int ret = open_locked(what, path, o, err, errlen);
 	if (ret) {
 		free(o);
 		return ret;
@@ -276,16 +307,16 @@ int mvod_output_reopen(struct mvod_output *o, char *err, size_t errlen)
 	if (stat(o->path, &now) == 0 && fstat(o->fd, &open_st) == 0 && now.st_dev == open_st.st_dev &&
 	    now.st_ino == open_st.st_ino)
 		return 0;
-	int fd;
-	bool regular;
-	int ret = open_locked(o->what, o->path, &fd, &regular, err, errlen);
+	struct mvod_output next = {.what = o->what, .path = o->path};
+	int ret = open_locked(o->what, o->path, &next, err, errlen);
 	if (ret)
 		return ret;
 	/* The file rotated away is complete on disk before its successor gets a record. */
 	keep_error(o, sync_close(o->fd));
-	o->fd = fd;
-	o->regular = regular;
-	o->truncate_pending = false;
+	o->fd = next.fd;
+	o->regular = next.regular;
+	o->truncate_pending = o->created = false;
+	memcpy(o->target, next.target, sizeof(o->target));
 	return 0;
 }
 
@@ -293,6 +324,9 @@ int mvod_output_close(struct mvod_output *o)
 {
 	if (!o)
 		return 0;
+	/* A start that failed, or a run without a record, leaves no empty file it made. */
+	if (o->created && o->truncate_pending)
+		unlink(o->target);
 	int ret = sync_close(o->fd);
 	ret = o->error ? o->error : ret;
 	free(o);

@@ -24,12 +24,11 @@ extern "C" {
 #endif
 
 /*
- * Notes path (followed through symlinks) as an input of this process by device and inode. A
- * path that does not exist is no input: 0. Returns 0 or -errno (-ENOMEM). Thread-safe.
+ * Notes path (followed through symlinks) as an input of this process by device and inode, and
+ * its name, so that a file which later takes the inode of a deleted input is not taken for it.
+ * A path that does not exist is no input: 0. Returns 0 or -errno (-ENOMEM). Thread-safe.
  */
 int mvod_input_note(const char *path);
-/* The same for an open file. */
-int mvod_input_note_fd(int fd);
 /* Forgets every input noted (tests; a process ends without it). */
 void mvod_inputs_forget(void);
 

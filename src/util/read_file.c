@@ -37,7 +37,7 @@ static int open_input(const char *path, bool *fifo, char *err, size_t errlen)
 	if (fd < 0)
 		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
 	struct stat st;
-	int ret = fstat(fd, &st) != 0 ? -errno : mvod_input_note_fd(fd);
+	int ret = fstat(fd, &st) != 0 ? -errno : mvod_input_note(path);
 	if (ret) {
 		close(fd);
 		return mvod_errf(err, errlen, ret, "cannot read %s: %s", path, strerror(-ret));

@@ -177,7 +177,7 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 	if (!f)
 		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
 	/* Ground truth is an input: no output of this run may be it. */
-	ret = mvod_input_note_fd(fileno(f));
+	ret = mvod_input_note(path);
 	if (ret) {
 		mvod_errf(err, errlen, ret, "%s: out of memory", path);
 		goto out;
