@@ -129,8 +129,9 @@ static int kind_of(const char *what, const char *path, const struct stat *st,
 				 S_ISBLK(st->st_mode) ? "block device" : "socket");
 	if (is_input(st))
 		return mvod_errf(err, errlen, -EEXIST, "%s %s is a file this run reads (its source, a "
-				 "frame, times.txt, the calibration, the ground truth or the "
-				 "configuration): mvod never writes over its input; name another file",
+				 "frame, times.txt, the calibration, the ground truth, the "
+				 "configuration or the LCM log it replays): mvod never writes over its "
+				 "input; name another file",
 				 what, path);
 	return 0;
 }

@@ -200,6 +200,16 @@ static void test_output_is_input(void **state)
 	mvod(&r, "bench", "--source", images, "--calib", calib, "--gt", gt, "--csv", gt, NULL);
 	expect_fail(&r, 1, "is a file this run reads");
 	assert_unchanged(gt);
+	/* mvod view --png over the log it reads. */
+	char log_url[640];
+	snprintf(log_url, sizeof(log_url), "file://%s?mode=r&speed=0", lcmlog);
+	mvod(&r, "-q", "--source", images, "--calib", calib, "--max-frames", "3", "--lcm-url", url,
+	     NULL);
+	assert_int_equal(r.status, 0);
+	backup(lcmlog);
+	mvod(&r, "view", "--lcm-url", log_url, "--png", lcmlog, NULL);
+	expect_fail(&r, 1, "is a file this run reads");
+	assert_unchanged(lcmlog);
 }
 
 /* --- a failed start --- */
