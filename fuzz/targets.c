@@ -5,12 +5,14 @@
  * promise: on failure a one-line reason; on success a result that is usable.
  */
 #include <assert.h>
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "capture/euroc.h"
@@ -19,6 +21,8 @@
 #include "mvod/calib.h"
 #include "mvod/config.h"
 #include "mvod/traj.h"
+#include "ipc/lcm_log.h"
+#include "util/output.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -79,6 +83,57 @@ static int take_any(void *ctx, const char *key, const char *value, char *err, si
 }
 #endif
 
+#if defined(FUZZ_OUTPUT_PATH)
+/*
+ * A private folder holding a file f, a folder d and a FIFO p, made once and removed at exit.
+ * The policy only looks (stat, lstat, readlink, access): nothing is ever written through the
+ * fuzzed links, wherever they point.
+ */
+static char sandbox[64];
+
+static void remove_sandbox(void)
+{
+	static const char *const names[] = {"l", "f", "p", "d"};
+	char path[128];
+	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++) {
+		snprintf(path, sizeof(path), "%s/%s", sandbox, names[i]);
+		remove(path);
+	}
+	rmdir(sandbox);
+}
+
+static const char *make_sandbox(void)
+{
+	if (sandbox[0])
+		return sandbox;
+	char path[128];
+	snprintf(sandbox, sizeof(sandbox), "/tmp/mvod-fuzz-output-XXXXXX");
+	assert(mkdtemp(sandbox));
+	snprintf(path, sizeof(path), "%s/f", sandbox);
+	FILE *f = fopen(path, "w");
+	assert(f && fclose(f) == 0);
+	snprintf(path, sizeof(path), "%s/d", sandbox);
+	assert(mkdir(path, 0700) == 0);
+	snprintf(path, sizeof(path), "%s/p", sandbox);
+	assert(mkfifo(path, 0600) == 0);
+	atexit(remove_sandbox);
+	return sandbox;
+}
+
+/* What the policy said is there is there: the kind, and a replaced file named by itself. */
+static void check_target(enum mvod_output_kind kind, const char *target)
+{
+	struct stat st, lst;
+	if (kind == MVOD_OUTPUT_NEW)
+		return;
+	assert(stat(target, &st) == 0);
+	assert(kind != MVOD_OUTPUT_REGULAR || (S_ISREG(st.st_mode) && lstat(target, &lst) == 0 &&
+					       !S_ISLNK(lst.st_mode)));
+	assert(kind != MVOD_OUTPUT_DEVICE || S_ISCHR(st.st_mode));
+	assert(kind != MVOD_OUTPUT_FIFO || S_ISFIFO(st.st_mode));
+}
+#endif
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	char err[512] = "";
@@ -132,6 +187,31 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	free(s);
 	if (!ret)
 		assert(strlen(path) < sizeof(path));
+#elif defined(FUZZ_OUTPUT_PATH)
+	/*
+	 * Line 1: the text of a symlink made at SANDBOX/l; line 2: the output's name in SANDBOX.
+	 * Line 1 is also read as an --lcm-url: a file:// log's path is what lies before '?'.
+	 */
+	char *s = as_string(data, size), *nl = strchr(s, '\n');
+	const char *name = nl ? nl + 1 : "l";
+	if (nl)
+		*nl = '\0';
+	const char *dir = make_sandbox();
+	char link[128], out[4200], target[4096], upath[256];
+	snprintf(link, sizeof(link), "%s/l", dir);
+	remove(link);
+	/* A text the kernel refuses makes no link: that is a case too. */
+	if (s[0] && symlink(s, link) != 0)
+		assert(errno != EEXIST);
+	snprintf(out, sizeof(out), "%s/%s", dir, name);
+	enum mvod_output_kind kind;
+	ret = mvod_output_check("--out", out, target, sizeof(target), &kind, err, sizeof(err));
+	if (!ret)
+		check_target(kind, target);
+	int uret = mvod_lcm_log_url_path(s, upath, sizeof(upath));
+	assert(uret == 0 || uret == -ENOENT || uret == -ENAMETOOLONG);
+	assert(uret || (upath[0] && !strchr(upath, '?') && strncmp(s + 7, upath, strlen(upath)) == 0));
+	free(s);
 #elif defined(FUZZ_CONFIG)
 	/* What parses prints back as a file that parses to the same settings (prints the same). */
 	struct mvod_config c;

@@ -15,6 +15,7 @@
 #include "mvod/plot.h"
 #include "util/clock.h"
 #include "util/notify.h"
+#include "util/output.h"
 #include "mvod_status_t.h"
 
 /* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
@@ -175,17 +176,24 @@ static int open_inputs(struct run *r)
 	return ret;
 }
 
-/* Outputs open last, so bad input never leaves an empty or truncated output behind. */
+/*
+ * Outputs open last, so bad input never leaves an empty or truncated output behind; every one
+ * goes through the output policy (util/output.h), and none truncates before its first record.
+ */
 static int open_outputs(struct run *r)
 {
 	const struct mvod_run_opts *o = r->o;
-	if (o->trajectory) {
-		int ret = mvod_traj_writer_open(o->trajectory, o->traj_format, &r->traj);
-		if (ret) {
-			LOG(ERROR, "cannot create trajectory file %s: %s", o->trajectory,
-			    strerror(-ret));
-			return ret;
-		}
+	char err[512] = "", target[4096];
+	int ret = o->plot ? mvod_output_check("--plot", o->plot, target, sizeof(target), NULL, err,
+					      sizeof(err))
+			  : 0;
+	if (!ret && o->trajectory)
+		ret = mvod_traj_writer_open(o->trajectory, o->traj_format, &r->traj, err, sizeof(err));
+	if (!ret && r->ipc)
+		ret = mvod_ipc_open_log(r->ipc, err, sizeof(err));
+	if (ret) {
+		LOG(ERROR, "%s", err);
+		return ret;
 	}
 	if (mvod_path_init(&r->est_path, PATH_POINTS) || mvod_path_init(&r->gt_path, PATH_POINTS))
 		return -ENOMEM;
@@ -333,7 +341,8 @@ static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo
 	if (r->ipc && mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res) &&
 	    fault(r, MVOD_STATUS_T_FAULT_PUBLISH))
 		LOG(ERROR, "frame %lld: publishing the pose over LCM failed (the transport or log "
-			   "file refused it); mvod carries on, and says no more of it",
+			   "file refused it); mvod carries on, and says no more of it (a file:// log "
+			   "ends there, and mvod will exit with status 1)",
 		    (long long)f->index);
 	if (r->status_due || status_periodic_due(r))
 		publish_status(r, f, res);
@@ -414,10 +423,10 @@ static void reopen_outputs(struct run *r)
 	*r->o->reopen = 0;
 	if (!r->traj)
 		return;
-	int ret = mvod_traj_writer_reopen(r->traj);
+	char err[512] = "";
+	int ret = mvod_traj_writer_reopen(r->traj, err, sizeof(err));
 	if (ret)
-		LOG(ERROR, "cannot reopen trajectory %s: %s; still writing to the file open before",
-		    r->o->trajectory, strerror(-ret));
+		LOG(ERROR, "cannot reopen trajectory: %s; still writing to the file open before", err);
 	else
 		LOG(INFO, "reopened trajectory %s", r->o->trajectory);
 }
@@ -639,6 +648,12 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 	/* An incomplete trajectory is a failed run, even though the poses went out over LCM. */
 	if (tret && !ret)
 		ret = tret;
+	/* So is an incomplete file:// LCM log (its first failure was logged as FAULT_PUBLISH). */
+	int lret = mvod_ipc_finish(r.ipc);
+	if (lret && !(r.faults & MVOD_STATUS_T_FAULT_PUBLISH))
+		LOG(ERROR, "LCM log %s: %s", mvod_ipc_log_path(r.ipc), strerror(-lret));
+	if (lret && !ret)
+		ret = lret;
 	mvod_path_fini(&r.est_path);
 	mvod_path_fini(&r.gt_path);
 	mvod_vo_destroy(r.vo);

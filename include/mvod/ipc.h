@@ -2,6 +2,7 @@
 #ifndef MVOD_IPC_H
 #define MVOD_IPC_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include <lcm/lcm.h>
@@ -32,12 +33,36 @@ struct mvod_ipc;
 /*
  * url: an LCM provider URL, or NULL for LCM_DEFAULT_URL and then LCM's own default.
  * Channels NULL = the defaults above. Encoding buffers are allocated here, once.
+ * A file://PATH?mode=w URL is written by mvod's own log writer (LCM's event-log format), which,
+ * unlike LCM 1.3's, reports write errors; the file is opened by mvod_ipc_open_log, after the
+ * inputs were checked, never here.
  */
 int mvod_ipc_create(const char *url, const char *pose_channel, const char *status_channel,
 		    struct mvod_ipc **out);
 /* Same, on an lcm_t the caller owns and keeps alive longer (tests over memq://). */
 int mvod_ipc_create_on(lcm_t *lcm, const char *pose_channel, const char *status_channel,
 		       struct mvod_ipc **out);
+/*
+ * The publish seam: every encoded message goes to send(ctx, channel, buf, len), which returns
+ * 0 or -errno (tests make publishing fail with it). ctx is borrowed.
+ */
+typedef int (*mvod_ipc_send_fn)(void *ctx, const char *channel, const void *buf, size_t len);
+int mvod_ipc_create_with(mvod_ipc_send_fn send, void *ctx, const char *pose_channel,
+			 const char *status_channel, struct mvod_ipc **out);
+/*
+ * Opens the file:// log, through the output policy (locked; an existing log is truncated only
+ * when the first event is written); 0 for other URLs. Returns 0 or -errno, reason in err.
+ */
+int mvod_ipc_open_log(struct mvod_ipc *ipc, char *err, size_t errlen);
+/* The file:// log's path, or NULL. */
+const char *mvod_ipc_log_path(const struct mvod_ipc *ipc);
+/*
+ * Closes the file:// log after an fsync; publishing afterwards fails with -EBADF. Returns the
+ * first error of any event written or of the close (0 without a log): a log that is
+ * incomplete fails the run, as the trajectory does. NULL: 0.
+ */
+int mvod_ipc_finish(struct mvod_ipc *ipc);
+/* Finishes (ignoring the result) and frees. NULL is a no-op. */
 void mvod_ipc_destroy(struct mvod_ipc *ipc);
 
 int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,

@@ -22,17 +22,22 @@ const char *mvod_traj_format_name(enum mvod_traj_format fmt);
 
 /*
  * Writer: each pose is formatted into one buffer and written with a single write(2), so a
- * killed process leaves only complete lines. The file is created (truncated) at open.
+ * killed process leaves only complete lines. Opened through the output policy (util/output.h):
+ * a symlink is followed, a device or FIFO written into, an input of this process refused, the
+ * file locked against a second writer; an existing file is truncated only when the first pose
+ * is written, so a run that fails before keeps the trajectory before. Returns 0 or -errno with
+ * a reason in err.
  */
 struct mvod_traj_writer;
-int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mvod_traj_writer **out);
+int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt,
+			  struct mvod_traj_writer **out, char *err, size_t errlen);
 /* t in seconds (ignored by KITTI). */
 int mvod_traj_writer_add(struct mvod_traj_writer *w, double t, const struct mvod_pose *pose);
 /*
  * Log rotation: opens the file by its name again (creating it, appending when it exists) and
- * closes the old one after an fsync. On failure the old file stays in use.
+ * closes the old one after an fsync. On failure the old file stays in use; reason in err.
  */
-int mvod_traj_writer_reopen(struct mvod_traj_writer *w);
+int mvod_traj_writer_reopen(struct mvod_traj_writer *w, char *err, size_t errlen);
 /* fsyncs and closes; returns the first error seen by any add or the close. NULL is a no-op. */
 int mvod_traj_writer_close(struct mvod_traj_writer *w);
 

@@ -206,6 +206,27 @@ static int on_frame(const struct mvod_calib_opts *o, struct mvod_calib_det *det,
 /* A live camera or a long video says how it is going this often, in seconds. */
 #define PROGRESS_S 5.0
 
+/*
+ * Ctrl-C ends a live camera's recording, which has no other end: calibrate on it. A file has
+ * an end; a calibration on part of it would replace a good --out with a worse one, so nothing
+ * is written (--max-frames asks for a part on purpose).
+ */
+static int stopped_early(const struct mvod_calib_opts *o, struct mvod_source *src,
+			 const struct scan *sc, char *err, size_t errlen)
+{
+	struct mvod_source_info info;
+	mvod_source_info(src, &info);
+	if (!info.live) {
+		return mvod_errf(err, errlen, -EINTR, "calibrate: interrupted after %lld frames of %s, "
+				 "before its end: nothing written, earlier files are as they were; "
+				 "let it run to the end, or pass --max-frames N to calibrate on the "
+				 "first N frames", (long long)sc->frames, o->source);
+	}
+	LOG(INFO, "calibrate: stopped after %lld frames (%lld with the board); calibrating on "
+		  "them (Ctrl-C again aborts)", (long long)sc->frames, (long long)sc->with_board);
+	return 0;
+}
+
 static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 		    struct mvod_calib_det *det, struct store *s, struct scan *sc, char *err,
 		    size_t errlen)
@@ -240,8 +261,7 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 				  o->source, (long long)fr.index, strerror(-ret));
 	}
 	if (!ret && o->stop && *o->stop)
-		LOG(INFO, "calibrate: stopped after %lld frames (%lld with the board); calibrating on "
-			  "them (Ctrl-C again aborts)", (long long)sc->frames, (long long)sc->with_board);
+		ret = stopped_early(o, src, sc, err, errlen);
 	free(f.ids);
 	free(f.xy);
 	return ret > 0 ? 0 : ret;

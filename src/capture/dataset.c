@@ -9,11 +9,17 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "util/output.h"
+
 static_assert(offsetof(struct mvod_dataset, images) == 0, "the images ops take the dataset priv");
 
 int mvod_ds_read_lines(const char *path, mvod_ds_line_fn fn, void *ctx, char *err,
 		       size_t errlen)
 {
+	/* An index file is an input: no output of this process may be it (util/output.h). */
+	int noted = mvod_input_note(path);
+	if (noted < 0)
+		return mvod_errf(err, errlen, noted, "%s: %s", path, strerror(-noted));
 	FILE *f = fopen(path, "re");
 	if (!f)
 		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));

@@ -15,6 +15,7 @@
 #include "capture/uri.h"
 #include "capture/video_shim.h"
 #include "util/clock.h"
+#include "util/output.h"
 
 /*
  * Containers without a frame index (Matroska, AVI) have their frame count estimated from the
@@ -75,6 +76,9 @@ static int file_open(void *priv, const char *location, char *err, size_t errlen)
 	int ret = mvod_uri_parse(location, fs->path, sizeof(fs->path), take_param, fs, err, errlen);
 	if (ret == 0)
 		ret = check_file(path, err, errlen);
+	/* The video is an input: no output of this process may be it (util/output.h). */
+	if (ret == 0 && (ret = mvod_input_note(path)) != 0)
+		mvod_errf(err, errlen, ret, "%s: %s", path, strerror(-ret));
 	if (ret < 0)
 		return ret;
 	ret = mvod_video_open(path, &fs->video);

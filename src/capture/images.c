@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "mvod/log.h"
+#include "util/output.h"
 
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
@@ -251,10 +252,26 @@ static double times_fps(const int64_t *t, size_t n)
 	return (double)(n - 1) * 1e6 / (double)(t[n - 1] - t[0]);
 }
 
-/* What every way of opening ends with: the first image decoded, info filled in. */
-static int start(struct mvod_images *im, char *err, size_t errlen)
+/*
+ * Every frame and times.txt (NULL for a list: its index file is read through mvod_read_file,
+ * which notes it) are inputs: no output of this process may be one (util/output.h).
+ */
+static int note_inputs(const struct mvod_images *im, const char *times_path, char *err,
+		       size_t errlen)
 {
-	int ret = load_first(im, err, errlen);
+	const char *name = times_path;
+	int ret = times_path ? mvod_input_note(times_path) : 0;
+	for (size_t i = 0; i < im->n && !ret; i++)
+		ret = mvod_input_note(name = im->paths[i]);
+	return ret ? mvod_errf(err, errlen, ret, "%s: %s", name, strerror(-ret)) : 0;
+}
+
+/* What every way of opening ends with: inputs noted, the first image decoded, info filled in. */
+static int start(struct mvod_images *im, const char *times_path, char *err, size_t errlen)
+{
+	int ret = note_inputs(im, times_path, err, errlen);
+	if (ret >= 0)
+		ret = load_first(im, err, errlen);
 	if (ret < 0)
 		return ret;
 	im->info.frames = (int64_t)im->n;
@@ -272,7 +289,7 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
 	ret = load_times(im, times_path, err, errlen);
 	if (ret < 0 && ret != -ENOENT)
 		goto fail;
-	ret = start(im, err, errlen);
+	ret = start(im, times_path, err, errlen);
 	if (ret < 0)
 		goto fail;
 	if (!im->times_us)
@@ -289,7 +306,7 @@ int mvod_images_open_list(struct mvod_images *im, char **paths, size_t n, int64_
 	im->paths = paths;
 	im->n = n;
 	im->times_us = times_us;
-	int ret = start(im, err, errlen);
+	int ret = start(im, NULL, err, errlen);
 	if (ret < 0)
 		mvod_images_close(im);
 	return ret;

@@ -20,6 +20,7 @@
 #include "mvod/pipeline.h"
 #include "mvod/plot.h"
 #include "util/atomic_file.h"
+#include "util/output.h"
 
 /*
  * The default sweep: sub-grids joined by '|', each a cross product. Chosen to cover every
@@ -855,6 +856,19 @@ out:
 	return ret;
 }
 
+/*
+ * Before any run, by the output policy: the tables may not be the ground truth (noted here,
+ * as sweep children read it, not this process), a directory or a disk.
+ */
+static int check_outputs(const struct bench *b)
+{
+	if (b->cfg.run.gt && mvod_input_note(b->cfg.run.gt) == -ENOMEM)
+		return -ENOMEM;
+	if (b->csv && cli_check_writable("--csv", b->csv))
+		return -EINVAL;
+	return b->report && cli_check_writable("--report", b->report) ? -EINVAL : 0;
+}
+
 int mvod_cmd_bench(int argc, char **argv)
 {
 	struct bench b = {0};
@@ -866,7 +880,9 @@ int mvod_cmd_bench(int argc, char **argv)
 		return ret > 0 ? 0 : ret == -ENOMEM ? EXIT_FAILURE : EXIT_USAGE;
 	}
 	cli_quiet_libraries();
-	ret = b.grid ? bench_sweep(&b) : bench_one(&b);
+	ret = check_outputs(&b);
+	if (!ret)
+		ret = b.grid ? bench_sweep(&b) : bench_one(&b);
 	bench_free(&b);
 	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
 }

@@ -144,7 +144,7 @@ int mvod_cmd_board(int argc, char **argv)
 			c.have_board ? "--out FILE.png" : "--board SPEC", cli_prog);
 		return EXIT_USAGE;
 	}
-	if (cli_check_writable("out", c.out))
+	if (cli_check_writable("--out", c.out))
 		return EXIT_FAILURE;
 	return write_board(&c) ? EXIT_FAILURE : EXIT_SUCCESS;
 }

@@ -27,7 +27,8 @@ static void usage(FILE *out)
 "                          charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT  (COLSxROWS squares)\n"
 "                          chessboard:COLSxROWS:SQUARE_M             (inner corners)\n"
 "                        SQUARE_M is the side of a printed square in metres, as measured\n"
-"  --out FILE            calibration to write (required); replaced only on success\n"
+"  --out FILE            calibration to write (required); replaced only on success, and\n"
+"                        not when Ctrl-C stops a recorded file before its end\n"
 "  --model pinhole|fisheye  pinhole-radtan k1 k2 p1 p2 k3 (default) or Kannala-Brandt\n"
 "                        fisheye k1..k4 (lenses over about 120 deg)\n"
 "  --rational            pinhole with 8 coefficients k1 k2 p1 p2 k3 k4 k5 k6 (wide lenses)\n"
@@ -191,7 +192,7 @@ int mvod_cmd_calibrate(int argc, char **argv)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	cli_quiet_libraries();
 	/* Found out now, not after an hour of video. */
-	if (cli_check_writable("out", c.out) || (c.o.report && cli_check_writable("report", c.o.report)))
+	if (cli_check_writable("--out", c.out) || (c.o.report && cli_check_writable("--report", c.o.report)))
 		return EXIT_FAILURE;
 	/*
 	 * A live camera never ends: the first Ctrl-C ends the recording and calibrates on it;

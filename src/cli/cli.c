@@ -11,6 +11,7 @@
 #include "mvod/board.h"
 #include "mvod/capture.h"
 #include "mvod/log.h"
+#include "util/output.h"
 
 const char *cli_prog = "mvod";
 
@@ -99,21 +100,11 @@ int cli_parse_board(const char *s, struct mvod_board *b)
 
 int cli_check_writable(const char *opt, const char *path)
 {
-	struct stat st;
-	if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
-		fprintf(stderr, "%s: --%s %s: is a directory; name a file\n", cli_prog, opt, path);
-		return -EISDIR;
-	}
-	const char *slash = strrchr(path, '/');
-	char dir[4096];
-	snprintf(dir, sizeof(dir), "%.*s", slash ? (int)(slash - path) + 1 : 1, slash ? path : ".");
-	if (access(dir, W_OK) != 0) {
-		int e = errno;
-		fprintf(stderr, "%s: --%s %s: cannot write in %s: %s\n", cli_prog, opt, path, dir,
-			strerror(e));
-		return -e;
-	}
-	return 0;
+	char target[4096], err[1024];
+	int ret = mvod_output_check(opt, path, target, sizeof(target), NULL, err, sizeof(err));
+	if (ret)
+		fprintf(stderr, "%s: %s\n", cli_prog, err);
+	return ret;
 }
 
 void cli_usage_input(FILE *out)

@@ -22,9 +22,13 @@ bool cli_has_suffix(const char *s, const char *suffix);
 struct mvod_board;
 int cli_parse_board(const char *s, struct mvod_board *b);
 /*
- * Whether --opt FILE can be written, before any work: its directory must be writable and FILE
- * not a directory. Prints the reason and returns -errno when not.
+ * Whether FILE, given as opt ("--out", "OUT"), can be written, before any work, by the output policy (util/output.h):
+ * not a directory, block device, socket or input noted so far, in a folder that can be written
+ * in. Prints the reason and returns -errno when not.
  */
+/* mvod run's SIGINT, SIGTERM (stop) and SIGHUP (reopen) handlers; idempotent. */
+void cli_run_install_signals(void);
+
 int cli_check_writable(const char *opt, const char *path);
 
 /* Leaves FFmpeg's and libcamera's own diagnostics for --log-level debug: mvod says what to do. */

@@ -183,6 +183,9 @@ int mvod_cmd_convert(int argc, char **argv)
 		return 1;
 	}
 	print_camera(c.in, from, &cam);
+	/* IN is noted as an input now: OUT may not be it, nor a directory, nor a disk. */
+	if (cli_check_writable("OUT", c.out))
+		return 1;
 	ret = apply_size(&c, &cam);
 	if (ret)
 		return ret;

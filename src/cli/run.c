@@ -36,7 +36,7 @@ static void on_hup(int sig)
 	reopen_requested = 1;
 }
 
-static void install_signals(void)
+void cli_run_install_signals(void)
 {
 	/* No SA_RESTART for a stop: a blocking wait returns at once to look at the flag. */
 	struct sigaction stop = {.sa_handler = on_stop};
@@ -199,7 +199,6 @@ static int print_config(const struct mvod_config *cfg)
 
 static int run(struct mvod_config *cfg)
 {
-	install_signals();
 	mvod_notify_init();
 	struct mvod_ipc *ipc = NULL;
 	if (cfg->lcm_enabled &&
@@ -220,6 +219,11 @@ static int run(struct mvod_config *cfg)
 
 int mvod_cmd_run(int argc, char **argv)
 {
+	/*
+	 * First of all (again, as main's preinit did): a SIGHUP (log rotation) or SIGTERM while the
+	 * configuration, libraries and source load must not kill mvod by its default action.
+	 */
+	cli_run_install_signals();
 	struct cli c = {0};
 	struct mvod_config cfg;
 	mvod_config_default(&cfg);

@@ -18,6 +18,7 @@
 #include "mvod/view.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
+#include "util/output.h"
 
 /* A window is redrawn at most this often: enough to follow a robot, little CPU. */
 #define REFRESH_MS 100
@@ -113,6 +114,16 @@ static bool url_writes_log(const char *url)
 		if (strncmp(p + 1, "mode=", 5) == 0 && p[6] != 'r')
 			return true;
 	return false;
+}
+
+/* A file:// log is what the view reads: --png may not be it (util/output.h). */
+static int note_log(const char *url)
+{
+	char path[4096];
+	if (!url || strncmp(url, "file://", 7) != 0)
+		return 0;
+	snprintf(path, sizeof(path), "%.*s", (int)strcspn(url + 7, "?"), url + 7);
+	return mvod_input_note(path);
 }
 
 static bool have_display(void)
@@ -323,7 +334,8 @@ int mvod_cmd_view(int argc, char **argv)
 	int ret = parse_cli(argc, argv, &c);
 	if (ret)
 		return ret > 0 ? 0 : EXIT_USAGE;
-	if (c.png && cli_check_writable("png", c.png))
+	if (c.png && (note_log(c.url ? c.url : getenv("LCM_DEFAULT_URL")) ||
+		      cli_check_writable("--png", c.png)))
 		return EXIT_FAILURE;
 	/* No SA_RESTART: the signal interrupts LCM's wait at once. */
 	struct sigaction sa = {.sa_handler = on_signal};

@@ -6,16 +6,23 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ipc/lcm_log.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
 
 /*
  * One allocation holds the struct, both encoding buffers and both channel names, so the
  * per-frame publish path touches no allocator (the generated *_publish mallocs per call).
+ * Messages go out through one seam, send(): lcm_publish, mvod's own file:// log writer, or a
+ * test's function.
  */
 struct mvod_ipc {
-	lcm_t *lcm;
+	mvod_ipc_send_fn send;
+	void *send_ctx;
+	lcm_t *lcm;                /* owned when owns_lcm */
 	bool owns_lcm;
+	char *log_url, *log_path;  /* file://PATH?mode=w: opened by mvod_ipc_open_log, owned */
+	struct mvod_lcm_log *log;
 	uint8_t *pose_buf, *status_buf;
 	int pose_len, status_len;
 	char *pose_channel, *status_channel;
@@ -42,10 +49,33 @@ static bool channel_valid(const char *channel)
 	return len > 0 && len <= LCM_MAX_CHANNEL_NAME_LENGTH;
 }
 
+/* LCM reports failure as -1 without a cause; a send that fails is an I/O error. */
+static int lcm_send(void *ctx, const char *channel, const void *buf, size_t len)
+{
+	return lcm_publish(ctx, channel, buf, (unsigned int)len) == 0 ? 0 : -EIO;
+}
+
+static int log_send(void *ctx, const char *channel, const void *buf, size_t len)
+{
+	struct mvod_ipc *ipc = ctx;
+	return ipc->log ? mvod_lcm_log_write(ipc->log, channel, buf, len) : -EBADF;
+}
+
 int mvod_ipc_create_on(lcm_t *lcm, const char *pose_channel, const char *status_channel,
 		       struct mvod_ipc **out)
 {
-	if (!lcm || !out)
+	if (!lcm)
+		return -EINVAL;
+	int ret = mvod_ipc_create_with(lcm_send, lcm, pose_channel, status_channel, out);
+	if (!ret)
+		(*out)->lcm = lcm;
+	return ret;
+}
+
+int mvod_ipc_create_with(mvod_ipc_send_fn send, void *ctx, const char *pose_channel,
+			 const char *status_channel, struct mvod_ipc **out)
+{
+	if (!send || !out)
 		return -EINVAL;
 	if (!pose_channel)
 		pose_channel = MVOD_DEFAULT_POSE_CHANNEL;
@@ -61,7 +91,8 @@ int mvod_ipc_create_on(lcm_t *lcm, const char *pose_channel, const char *status_
 	if (!ipc)
 		return -ENOMEM;
 
-	ipc->lcm = lcm;
+	ipc->send = send;
+	ipc->send_ctx = ctx;
 	ipc->pose_len = pose_len;
 	ipc->status_len = status_len;
 	ipc->pose_buf = (uint8_t *)ipc->storage;
@@ -74,18 +105,43 @@ int mvod_ipc_create_on(lcm_t *lcm, const char *pose_channel, const char *status_
 	return 0;
 }
 
+/* A file:// log LCM would write: mvod's own writer, opened later by mvod_ipc_open_log. */
+static int create_log(const char *url, const char *path, const char *pose_channel,
+		      const char *status_channel, struct mvod_ipc **out)
+{
+	struct mvod_ipc *ipc = NULL;
+	int ret = mvod_ipc_create_with(log_send, NULL, pose_channel, status_channel, &ipc);
+	if (ret)
+		return ret;
+	ipc->send_ctx = ipc;
+	ipc->log_path = strdup(path);
+	ipc->log_url = strdup(url);
+	if (!ipc->log_path || !ipc->log_url) {
+		mvod_ipc_destroy(ipc);
+		return -ENOMEM;
+	}
+	*out = ipc;
+	return 0;
+}
+
 int mvod_ipc_create(const char *url, const char *pose_channel, const char *status_channel,
 		    struct mvod_ipc **out)
 {
 	struct mvod_ipc *ipc = NULL;
+	char path[4096];
 	if (!out)
 		return -EINVAL;
+	/* LCM_DEFAULT_URL too: a file:// log named there is written by mvod as well. */
+	const char *u = url ? url : getenv("LCM_DEFAULT_URL");
+	int ret = mvod_lcm_log_url_path(u, path, sizeof(path));
+	if (ret != -ENOENT)
+		return ret ? ret : create_log(u, path, pose_channel, status_channel, out);
 	/* A NULL url makes lcm_create consult LCM_DEFAULT_URL, then fall back to its default. */
 	lcm_t *lcm = lcm_create(url);
 	if (!lcm)
 		return -EINVAL;
 
-	int ret = mvod_ipc_create_on(lcm, pose_channel, status_channel, &ipc);
+	ret = mvod_ipc_create_on(lcm, pose_channel, status_channel, &ipc);
 	if (ret < 0)
 		goto err_lcm;
 	ipc->owns_lcm = true;
@@ -97,21 +153,50 @@ err_lcm:
 	return ret;
 }
 
+int mvod_ipc_open_log(struct mvod_ipc *ipc, char *err, size_t errlen)
+{
+	if (!ipc->log_path || ipc->log)
+		return 0;
+	size_t chan = strlen(ipc->pose_channel) > strlen(ipc->status_channel)
+			      ? strlen(ipc->pose_channel)
+			      : strlen(ipc->status_channel);
+	size_t msg = (size_t)(ipc->pose_len > ipc->status_len ? ipc->pose_len : ipc->status_len);
+	char what[4200];
+	snprintf(what, sizeof(what), "--lcm-url %s: LCM log", ipc->log_url);
+	return mvod_lcm_log_open(what, ipc->log_path, chan + msg, &ipc->log, err, errlen);
+}
+
+int mvod_ipc_finish(struct mvod_ipc *ipc)
+{
+	if (!ipc || !ipc->log)
+		return 0;
+	int ret = mvod_lcm_log_close(ipc->log);
+	ipc->log = NULL;
+	return ret;
+}
+
+const char *mvod_ipc_log_path(const struct mvod_ipc *ipc)
+{
+	return ipc ? ipc->log_path : NULL;
+}
+
 void mvod_ipc_destroy(struct mvod_ipc *ipc)
 {
 	if (!ipc)
 		return;
+	mvod_ipc_finish(ipc);
 	if (ipc->owns_lcm)
 		lcm_destroy(ipc->lcm);
+	free(ipc->log_path);
+	free(ipc->log_url);
 	free(ipc);
 }
 
-static int publish(lcm_t *lcm, const char *channel, const uint8_t *buf, int len)
+static int publish(const struct mvod_ipc *ipc, const char *channel, const uint8_t *buf, int len)
 {
-	/* LCM reports failure as -1 without a cause; a send that fails is an I/O error. */
 	if (len < 0)
 		return -EMSGSIZE;
-	return lcm_publish(lcm, channel, buf, (unsigned int)len) == 0 ? 0 : -EIO;
+	return ipc->send(ipc->send_ctx, channel, buf, (size_t)len);
 }
 
 int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
@@ -132,7 +217,7 @@ int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 	mvod_rot_to_quat(res->pose.R, msg.orientation);
 
 	int len = mvod_pose_t_encode(ipc->pose_buf, 0, ipc->pose_len, &msg);
-	return publish(ipc->lcm, ipc->pose_channel, ipc->pose_buf, len);
+	return publish(ipc, ipc->pose_channel, ipc->pose_buf, len);
 }
 
 int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
@@ -158,5 +243,5 @@ int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
 	};
 
 	int len = mvod_status_t_encode(ipc->status_buf, 0, ipc->status_len, &msg);
-	return publish(ipc->lcm, ipc->status_channel, ipc->status_buf, len);
+	return publish(ipc, ipc->status_channel, ipc->status_buf, len);
 }

@@ -6,7 +6,11 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <stdbool.h>
+#include <sys/stat.h>
+
 #include "util/errbuf.h"
+#include "util/output.h"
 
 /* The buffer doubles from a page up to max + 1 bytes, the first byte too many. */
 static int grow(char **buf, size_t *cap, size_t max)
@@ -21,12 +25,34 @@ static int grow(char **buf, size_t *cap, size_t max)
 	return 0;
 }
 
+/*
+ * Opened without blocking, so that a FIFO nobody writes into cannot hang mvod before its
+ * watchdog runs: its first read says 0 (no writer) and it is refused at once; EAGAIN means a
+ * writer is there, and from then on reads block as they do on a pipe. The file is noted as an
+ * input: no output of this process may be it. Returns the descriptor or -errno.
+ */
+static int open_input(const char *path, bool *fifo, char *err, size_t errlen)
+{
+	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+	if (fd < 0)
+		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+	struct stat st;
+	int ret = fstat(fd, &st) != 0 ? -errno : mvod_input_note(path);
+	if (ret) {
+		close(fd);
+		return mvod_errf(err, errlen, ret, "cannot read %s: %s", path, strerror(-ret));
+	}
+	*fifo = S_ISFIFO(st.st_mode);
+	return fd;
+}
+
 int mvod_read_file(const char *path, size_t max, const char *what, char **out, size_t *len, char *err,
 		   size_t errlen)
 {
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	bool fifo = false;
+	int fd = open_input(path, &fifo, err, errlen);
 	if (fd < 0)
-		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+		return fd;
 	char *buf = NULL;
 	size_t n = 0, cap = 0;
 	int ret = 0;
@@ -41,8 +67,13 @@ int mvod_read_file(const char *path, size_t max, const char *what, char **out, s
 			break;
 		}
 		ssize_t r = read(fd, buf + n, cap - n);
+		if (r == 0 && fifo && n == 0)
+			ret = mvod_errf(err, errlen, -ENXIO, "%s is a FIFO that no process writes into: "
+					"start the writer first, or name a file as the %s", path, what);
 		if (r == 0)
 			break;
+		if (r < 0 && errno == EAGAIN && fcntl(fd, F_SETFL, 0) == 0)
+			continue;
 		if (r < 0 && errno != EINTR) {
 			ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
 			break;

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "util/errbuf.h"
+#include "util/output.h"
 
 const char *const mvod_traj_format_names[] = {"tum", "kitti", NULL};
 
@@ -18,22 +19,18 @@ const char *mvod_traj_format_name(enum mvod_traj_format fmt)
 }
 
 struct mvod_traj_writer {
-	int fd;
-	int error; /* first failure, reported again at close */
+	struct mvod_output *out; /* the output policy: locked, truncated at the first line */
 	enum mvod_traj_format fmt;
-	char *path; /* for reopening */
 };
 
-int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mvod_traj_writer **out)
+int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt,
+			  struct mvod_traj_writer **out, char *err, size_t errlen)
 {
 	struct mvod_traj_writer *w = calloc(1, sizeof(*w));
 	if (!w)
-		return -ENOMEM;
-	w->path = strdup(path);
-	w->fd = w->path ? open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644) : -1;
-	if (w->fd < 0) {
-		int ret = w->path ? -errno : -ENOMEM;
-		free(w->path);
+		return mvod_errf(err, errlen, -ENOMEM, "trajectory %s: out of memory", path);
+	int ret = mvod_output_open("trajectory", path, &w->out, err, errlen);
+	if (ret) {
 		free(w);
 		return ret;
 	}
@@ -42,18 +39,9 @@ int mvod_traj_writer_open(const char *path, enum mvod_traj_format fmt, struct mv
 	return 0;
 }
 
-int mvod_traj_writer_reopen(struct mvod_traj_writer *w)
+int mvod_traj_writer_reopen(struct mvod_traj_writer *w, char *err, size_t errlen)
 {
-	int fd = open(w->path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-	if (fd < 0)
-		return -errno;
-	/* The file rotated away is complete on disk before its successor gets a line. */
-	if (fsync(w->fd) != 0 && errno != EINVAL && !w->error)
-		w->error = -errno;
-	if (close(w->fd) != 0 && !w->error)
-		w->error = -errno;
-	w->fd = fd;
-	return 0;
+	return mvod_output_reopen(w->out, err, errlen);
 }
 
 /* -0 + 0 is +0: an identity pose prints as "0", not "-0", which reads like a sign bug. */
@@ -84,36 +72,14 @@ int mvod_traj_writer_add(struct mvod_traj_writer *w, double t, const struct mvod
 	if (len < 0 || len >= (int)sizeof(line))
 		return -EOVERFLOW;
 	/* One write(2) per line: a killed process never leaves a partial line behind. */
-	ssize_t n;
-	do
-		n = write(w->fd, line, (size_t)len);
-	while (n < 0 && errno == EINTR);
-	int ret = 0;
-	if (n < 0)
-		ret = -errno;
-	else if (n != len)
-		ret = -ENOSPC;
-	if (ret && !w->error)
-		w->error = ret;
-	if (n > 0 && n != len) {
-		/* A short write on a full disk: cut the partial line so the file stays parseable. */
-		off_t end = lseek(w->fd, -(off_t)n, SEEK_END);
-		if (end >= 0 && ftruncate(w->fd, end) != 0)
-			w->error = -errno;
-	}
-	return ret;
+	return mvod_output_write(w->out, line, (size_t)len);
 }
 
 int mvod_traj_writer_close(struct mvod_traj_writer *w)
 {
 	if (!w)
 		return 0;
-	int ret = w->error;
-	if (fsync(w->fd) != 0 && errno != EINVAL && !ret)
-		ret = -errno;
-	if (close(w->fd) != 0 && !ret)
-		ret = -errno;
-	free(w->path);
+	int ret = mvod_output_close(w->out);
 	free(w);
 	return ret;
 }
@@ -210,6 +176,12 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 	FILE *f = fopen(path, "r");
 	if (!f)
 		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
+	/* Ground truth is an input: no output of this run may be it. */
+	ret = mvod_input_note(path);
+	if (ret) {
+		mvod_errf(err, errlen, ret, "%s: out of memory", path);
+		goto out;
+	}
 	while (getline(&line, &linecap, f) > 0) {
 		double v[12];
 		lineno++;

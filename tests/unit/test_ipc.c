@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include "harness.h"
+#include "ipc/lcm_log.h"
 #include "mvod/ipc.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
@@ -303,7 +304,9 @@ static void test_file_log(void **state)
 	tmplog_init(&t);
 
 	assert_int_equal(mvod_ipc_create(t.url, NULL, NULL, &ipc), 0);
+	assert_int_equal(mvod_ipc_open_log(ipc, NULL, 0), 0);
 	publish_poses(ipc, 5);
+	assert_int_equal(mvod_ipc_finish(ipc), 0);
 	mvod_ipc_destroy(ipc);
 
 	assert_int_equal(harness_poses(t.path, poses, 8), 5);
@@ -328,11 +331,112 @@ static void test_default_url_from_env(void **state)
 		unsetenv("LCM_DEFAULT_URL");
 	free(restore);
 	assert_int_equal(ret, 0);
+	assert_int_equal(mvod_ipc_open_log(ipc, NULL, 0), 0);
 	publish_poses(ipc, 3);
 	mvod_ipc_destroy(ipc);
 
 	assert_int_equal(harness_poses(t.path, NULL, 0), 3);
 	tmplog_fini(&t);
+}
+
+/* The log is opened by mvod_ipc_open_log, never by create: a failed start leaves it alone. */
+static void test_file_log_opened_late(void **state)
+{
+	struct tmplog t;
+	struct mvod_ipc *ipc = NULL;
+	struct mvod_vo_result res;
+	double q[4];
+	tmplog_init(&t);
+	harness_write_file(t.path, "the log of the run before");
+
+	assert_int_equal(mvod_ipc_create(t.url, NULL, NULL, &ipc), 0);
+	make_result(0, &res, q);
+	assert_int_equal(mvod_ipc_publish_pose(ipc, 1, 0, &res), -EBADF);
+	assert_int_equal(mvod_ipc_open_log(ipc, NULL, 0), 0);
+	assert_string_equal(mvod_ipc_log_path(ipc), t.path);
+	mvod_ipc_destroy(ipc);
+	char text[64];
+	harness_read_file(t.path, text, sizeof(text));
+	assert_string_equal(text, "the log of the run before");
+	tmplog_fini(&t);
+}
+
+/* A log on a device that refuses every write: the error comes back, and again at the end. */
+static void test_file_log_write_error(void **state)
+{
+	struct mvod_ipc *ipc = NULL;
+	struct mvod_vo_result res;
+	double q[4];
+	char err[256] = "";
+	make_result(0, &res, q);
+	assert_int_equal(mvod_ipc_create("file:///dev/full?mode=w", NULL, NULL, &ipc), 0);
+	assert_int_equal(mvod_ipc_open_log(ipc, err, sizeof(err)), 0);
+	assert_int_equal(mvod_ipc_publish_pose(ipc, 1, 0, &res), -ENOSPC);
+	assert_int_equal(mvod_ipc_publish_pose(ipc, 2, 1, &res), -ENOSPC);
+	assert_int_equal(mvod_ipc_finish(ipc), -ENOSPC);
+	mvod_ipc_destroy(ipc);
+}
+
+struct sent {
+	int calls, ret;
+	char channel[64];
+};
+
+static int fake_send(void *ctx, const char *channel, const void *buf, size_t len)
+{
+	struct sent *s = ctx;
+	s->calls++;
+	snprintf(s->channel, sizeof(s->channel), "%s", channel);
+	return len > 0 ? s->ret : -EINVAL;
+}
+
+/* The publish seam: every message goes through it, and its failure is the publish's. */
+static void test_send_seam(void **state)
+{
+	struct sent s = {.ret = -EIO};
+	struct mvod_ipc *ipc = NULL;
+	struct mvod_vo_result res;
+	struct mvod_status st = {.faults = 1};
+	double q[4];
+	make_result(0, &res, q);
+	assert_int_equal(mvod_ipc_create_with(fake_send, &s, "P", "S", &ipc), 0);
+	assert_int_equal(mvod_ipc_publish_pose(ipc, 1, 0, &res), -EIO);
+	assert_string_equal(s.channel, "P");
+	s.ret = 0;
+	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);
+	assert_string_equal(s.channel, "S");
+	assert_int_equal(s.calls, 2);
+	assert_int_equal(mvod_ipc_finish(ipc), 0);
+	mvod_ipc_destroy(ipc);
+}
+
+/* Which URLs mvod writes itself: file:// with mode=w among the options, nothing else. */
+static void test_log_urls(void **state)
+{
+	static const struct {
+		const char *url, *path;
+	} cases[] = {
+		{"file:///tmp/a.lcm?mode=w", "/tmp/a.lcm"},
+		{"file:///tmp/a.lcm?speed=1&mode=w", "/tmp/a.lcm"},
+		{"file://rel/a.lcm?mode=w&speed=1", "rel/a.lcm"},
+		{"file:///tmp/a.lcm", NULL},          /* LCM's default mode is r: playback */
+		{"file:///tmp/a.lcm?mode=r", NULL},
+		{"file:///tmp/a.lcm?mode=wx", NULL},
+		{"file://?mode=w", ""},               /* no path: -ENAMETOOLONG, refused */
+		{"memq://", NULL},
+		{"udpm://239.255.76.67:7667?ttl=0", NULL},
+		{NULL, NULL},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		char path[64] = "unchanged";
+		int ret = mvod_lcm_log_url_path(cases[i].url, path, sizeof(path));
+		if (!cases[i].path)
+			assert_int_equal(ret, -ENOENT);
+		else if (!cases[i].path[0])
+			assert_int_equal(ret, -ENAMETOOLONG);
+		else
+			assert_string_equal(path, cases[i].path);
+	}
 }
 
 int main(void)
@@ -345,6 +449,10 @@ int main(void)
 		cmocka_unit_test(test_bad_url),
 		cmocka_unit_test(test_file_log),
 		cmocka_unit_test(test_default_url_from_env),
+		cmocka_unit_test(test_file_log_opened_late),
+		cmocka_unit_test(test_file_log_write_error),
+		cmocka_unit_test(test_send_seam),
+		cmocka_unit_test(test_log_urls),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

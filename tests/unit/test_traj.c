@@ -38,7 +38,7 @@ static void round_trip(enum mvod_traj_format fmt, double tol)
 	char path[128];
 	snprintf(path, sizeof(path), "%s/traj.%s", dir, mvod_traj_format_name(fmt));
 	struct mvod_traj_writer *w;
-	assert_int_equal(mvod_traj_writer_open(path, fmt, &w), 0);
+	assert_int_equal(mvod_traj_writer_open(path, fmt, &w, NULL, 0), 0);
 	for (int i = 0; i < 50; i++) {
 		struct mvod_pose p;
 		make_pose(i, &p);
@@ -115,7 +115,7 @@ static void test_no_negative_zero(void **state)
 		char path[128];
 		snprintf(path, sizeof(path), "%s/zero.%d", dir, f);
 		struct mvod_traj_writer *w;
-		assert_int_equal(mvod_traj_writer_open(path, (enum mvod_traj_format)f, &w), 0);
+		assert_int_equal(mvod_traj_writer_open(path, (enum mvod_traj_format)f, &w, NULL, 0), 0);
 		struct mvod_pose p = {.R = {1, -0.0, -0.0, -0.0, 1, -0.0, -0.0, -0.0, 1},
 				      .t = {-0.0, -0.0, -0.0}};
 		assert_int_equal(mvod_traj_writer_add(w, 0, &p), 0);
@@ -208,7 +208,7 @@ static void test_writer_reports_full_disk(void **state)
 	if (access("/dev/full", W_OK) != 0)
 		skip();
 	struct mvod_traj_writer *w;
-	assert_int_equal(mvod_traj_writer_open("/dev/full", MVOD_TRAJ_TUM, &w), 0);
+	assert_int_equal(mvod_traj_writer_open("/dev/full", MVOD_TRAJ_TUM, &w, NULL, 0), 0);
 	struct mvod_pose p;
 	make_pose(1, &p);
 	assert_int_equal(mvod_traj_writer_add(w, 0, &p), -ENOSPC);

@@ -484,7 +484,7 @@ private:
 	void open_trajectory(const char *name, mvod_traj_format format, mvod_traj_writer **writer)
 	{
 		const fs::path file = dir_ / name;
-		const int rc = mvod_traj_writer_open(file.c_str(), format, writer);
+		const int rc = mvod_traj_writer_open(file.c_str(), format, writer, nullptr, 0);
 		if (rc < 0)
 			throw Failure(kExitFailure, "cannot write " + file.string() + ": " + errno_text(rc));
 	}
