@@ -153,7 +153,7 @@ static void test_tum_golden_lines(void **state)
 	snprintf(path, sizeof(path), "%s/golden.tum", dir);
 	for (size_t i = 0; i < sizeof(tum_golden) / sizeof(tum_golden[0]); i++) {
 		struct mvod_traj_writer *w;
-		assert_int_equal(mvod_traj_writer_open(path, MVOD_TRAJ_TUM, &w), 0);
+		assert_int_equal(mvod_traj_writer_open(path, MVOD_TRAJ_TUM, &w, NULL, 0), 0);
 		struct mvod_pose p = {.t = {1, -2, 3.25}};
 		memcpy(p.R, tum_golden[i].R, sizeof(p.R));
 		assert_int_equal(mvod_traj_writer_add(w, 12.5, &p), 0);
@@ -188,14 +188,14 @@ static void test_reopen_appends(void **state)
 	struct mvod_traj_writer *w;
 	struct mvod_pose p;
 	make_pose(1, &p);
-	assert_int_equal(mvod_traj_writer_open(path, MVOD_TRAJ_TUM, &w), 0);
+	assert_int_equal(mvod_traj_writer_open(path, MVOD_TRAJ_TUM, &w, NULL, 0), 0);
 	for (int i = 0; i < 2; i++)
 		assert_int_equal(mvod_traj_writer_add(w, i, &p), 0);
-	assert_int_equal(mvod_traj_writer_reopen(w), 0);
+	assert_int_equal(mvod_traj_writer_reopen(w, NULL, 0), 0);
 	assert_int_equal(mvod_traj_writer_add(w, 2, &p), 0);
 	assert_int_equal(harness_count_lines(path), 3);
 	assert_int_equal(rename(path, moved), 0);
-	assert_int_equal(mvod_traj_writer_reopen(w), 0);
+	assert_int_equal(mvod_traj_writer_reopen(w, NULL, 0), 0);
 	assert_int_equal(mvod_traj_writer_add(w, 3, &p), 0);
 	assert_int_equal(mvod_traj_writer_close(w), 0);
 	assert_int_equal(harness_count_lines(moved), 3);
