@@ -51,8 +51,12 @@ static int64_t event_len(const uint8_t *h, int64_t off, int64_t size, bool *cut,
 			 size_t whylen)
 {
 	int64_t left = size - off;
+	/*
+	 * LCM reads the 4 bytes after each event and drops the event unless they are a sync
+	 * word (or fewer than 4 remain): only then does it read every event before this one.
+	 */
 	if (left < HEADER_BYTES) {
-		*cut = true;
+		*cut = left < 4 || be32(h) == SYNC;
 		snprintf(why, whylen, "the log ends %lld bytes into an event header of %d",
 			 (long long)left, HEADER_BYTES);
 		return 0;
