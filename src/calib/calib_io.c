@@ -306,7 +306,9 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 	enum mvod_calib_format f = MVOD_CALIB_FMT_KITTI;
 	char why[256] = "";
 	const bool json = *p == '{' || *p == '[';
-	if (kitti_only || (!json && strstr(body, "P0:")))
+	if (!*p)
+		ret = mvod_errf(why, sizeof(why), -EINVAL, "the file is empty");
+	else if (kitti_only || (!json && strstr(body, "P0:")))
 		ret = kitti_camera(body, cam, why, sizeof(why));
 	else if (json)
 		ret = json_any_camera(p, cam, &f, why, sizeof(why));

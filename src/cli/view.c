@@ -281,7 +281,8 @@ static int open_lcm(struct viewer *w)
 /*
  * A log is checked before LCM reads it (view/lcmlog.h): corrupt, it is refused with the place;
  * only cut short at its end (a writer stopped mid-event), LCM reads it up to there, safely.
- * A path that cannot be opened is left for LCM to report.
+ * A log that cannot be read, or holds no event, is refused too: LCM would only say "check
+ * --lcm-url".
  */
 static int check_log(struct viewer *w)
 {
@@ -289,8 +290,10 @@ static int check_log(struct viewer *w)
 	char buf[4096];
 	snprintf(buf, sizeof(buf), "%.*s", (int)strcspn(path, "?"), path);
 	int fd = open(buf, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-	if (fd < 0)
-		return 0;
+	if (fd < 0) {
+		LOG(ERROR, "cannot read log %s: %s", buf, strerror(errno));
+		return -errno;
+	}
 	struct mvod_lcmlog_check c;
 	int ret = mvod_lcmlog_check(fd, &c);
 	close(fd);
@@ -299,6 +302,11 @@ static int check_log(struct viewer *w)
 		return ret;
 	}
 	w->cut_at = c.cut ? c.bad_offset : -1;
+	if (c.events == 0 && (c.bad_offset < 0 || c.cut)) {
+		LOG(ERROR, "log %s holds no whole event (%lld bytes): nothing to show", buf,
+		    (long long)c.size);
+		return -ENODATA;
+	}
 	if (c.bad_offset < 0)
 		return 0;
 	if (c.cut) {

@@ -249,7 +249,10 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 		if (ret)
 			goto out;
 	}
-	if (tr.n == 0)
+	/* getline ends on errors too (a directory: EISDIR), which are no empty file. */
+	if (ferror(f))
+		ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+	else if (tr.n == 0)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s: no poses (an empty file, or only comments)",
 				path);
 out:

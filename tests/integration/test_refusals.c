@@ -127,6 +127,16 @@ static void test_bom(void **state)
 	expect(yaml, 0, "mvod: 4 frames", NULL);
 }
 
+/* An empty calibration file is called empty, not "unknown format: no camera_matrix key". */
+static void test_empty_calibration(void **state)
+{
+	(void)state;
+	char path[300];
+	snprintf(path, sizeof(path), "%s/empty.json", harness_tmpdir());
+	harness_write_file(path, "\n");
+	expect(path, 1, "empty.json: the file is empty", NULL);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -136,6 +146,7 @@ int main(void)
 		cmocka_unit_test(test_channel_too_long),
 		cmocka_unit_test(test_image_too_small),
 		cmocka_unit_test(test_bom),
+		cmocka_unit_test(test_empty_calibration),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

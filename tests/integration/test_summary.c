@@ -108,6 +108,16 @@ static void test_full_gt(void **state)
 		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
 }
 
+/* A folder given as the ground truth is not "an empty file". */
+static void test_gt_is_a_folder(void **state)
+{
+	(void)state;
+	struct run_result r;
+	run_with_gt(seq, &r);
+	if (r.status != 1 || !strstr(r.err, "seq: Is a directory") || strstr(r.err, "no poses"))
+		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -115,6 +125,7 @@ int main(void)
 		cmocka_unit_test(test_zero_quaternion),
 		cmocka_unit_test(test_partial_gt),
 		cmocka_unit_test(test_full_gt),
+		cmocka_unit_test(test_gt_is_a_folder),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

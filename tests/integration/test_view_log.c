@@ -149,6 +149,25 @@ static void test_sound_log(void **state)
 		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
 }
 
+/* No log, or an empty one: said so, where LCM would only ask to check --lcm-url. */
+static void test_missing_and_empty(void **state)
+{
+	(void)state;
+	char path[300];
+	struct run_result r;
+	snprintf(path, sizeof(path), "%s/none.lcmlog", harness_tmpdir());
+	view(path, &r);
+	if (r.status != 1 || !strstr(r.err, "none.lcmlog: No such file or directory") ||
+	    strstr(r.err, "check --lcm-url"))
+		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
+	snprintf(path, sizeof(path), "%s/empty.lcmlog", harness_tmpdir());
+	harness_write_file(path, "");
+	view(path, &r);
+	if (r.status != 1 || !strstr(r.err, "empty.lcmlog holds no whole event (0 bytes)") ||
+	    strstr(r.err, "check --lcm-url"))
+		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -156,6 +175,7 @@ int main(void)
 		cmocka_unit_test(test_corrupt_middle),
 		cmocka_unit_test(test_cut_tail),
 		cmocka_unit_test(test_sound_log),
+		cmocka_unit_test(test_missing_and_empty),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
