@@ -67,6 +67,19 @@ static void mkvideo(const char *out, const char *codec, int n, const char *const
 		fail_msg("mkvideo failed: %s", r.err);
 }
 
+/* mvod on 60 frames made by mkvideo as name, with a 64x48 calibration. */
+static void run_video(const char *name, const char *codec, const char *const *frames,
+		      struct run_result *r)
+{
+	char video[300], src[310], cal[300];
+	snprintf(video, sizeof(video), "%s/%s", harness_tmpdir(), name);
+	snprintf(src, sizeof(src), "file:%s", video);
+	snprintf(cal, sizeof(cal), "%s/small.json", harness_tmpdir());
+	mkvideo(video, codec, 60, frames);
+	write_calib(cal, 64, 48);
+	run_mvod(src, cal, r);
+}
+
 /*
  * Frames 20 ms and 200 ms apart in turn: FFmpeg's nominal rate is then the 1 kHz time base
  * and OpenCV announces 6600 frames for the 60 there are. The file is whole: every frame comes
@@ -83,14 +96,8 @@ static void test_variable_frame_rate(void **state)
 		snprintf(spec[i], sizeof(spec[i]), "64x48@%ld", t);
 		frames[i] = spec[i];
 	}
-	char video[300], src[310], cal[300];
-	snprintf(video, sizeof(video), "%s/vfr.mkv", harness_tmpdir());
-	snprintf(src, sizeof(src), "file:%s", video);
-	snprintf(cal, sizeof(cal), "%s/small.json", harness_tmpdir());
-	mkvideo(video, "ffv1", 60, frames);
-	write_calib(cal, 64, 48);
 	struct run_result r;
-	run_mvod(src, cal, &r);
+	run_video("vfr.mkv", "ffv1", frames, &r);
 	if (r.status != 0 || !strstr(r.out, "mvod: 60 frames"))
 		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
 	struct mvod_traj tr;
@@ -118,14 +125,8 @@ static void test_video_resolution_change(void **state)
 		snprintf(spec[i], sizeof(spec[i]), "%s@%d", i < 30 ? "64x48" : "96x72", i * 40);
 		frames[i] = spec[i];
 	}
-	char video[300], src[310], cal[300];
-	snprintf(video, sizeof(video), "%s/resize.ts", harness_tmpdir());
-	snprintf(src, sizeof(src), "file:%s", video);
-	snprintf(cal, sizeof(cal), "%s/small.json", harness_tmpdir());
-	mkvideo(video, "mpeg2video", 60, frames);
-	write_calib(cal, 64, 48);
 	struct run_result r;
-	run_mvod(src, cal, &r);
+	run_video("resize.ts", "mpeg2video", frames, &r);
 	if (r.status != 0 || !strstr(r.out, "mvod: 30 frames") ||
 	    !strstr(r.out, "29 skipped: 29 of another size") ||
 	    !strstr(r.err, "frame 30 is of another size (the sequence is 64x48)"))
