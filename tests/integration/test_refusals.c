@@ -1,7 +1,8 @@
 /*
  * Refusals that say what is wrong (issue 10): calibrations that cannot be a camera of their
  * image size, and the messages that were unclear: a channel name too long for LCM, images too
- * small for the detector, a UTF-8 byte order mark in a calibration file (now accepted).
+ * small for the detector, a UTF-8 byte order mark in a calibration file (now accepted), an empty
+ * calibration file, running out of memory.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -9,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -137,6 +139,60 @@ static void test_empty_calibration(void **state)
 	expect(path, 1, "empty.json: the file is empty", NULL);
 }
 
+/* A 6000x4000 grey PGM of a ramp at path (24 MB; PGM: no encoder needed). */
+static void write_big_pgm(const char *path)
+{
+	enum { W = 6000, H = 4000 };
+	static unsigned char row[W];
+	for (int i = 0; i < W; i++)
+		row[i] = (unsigned char)(i * 7);
+	FILE *f = fopen(path, "wb");
+	assert_non_null(f);
+	fprintf(f, "P5\n%d %d\n255\n", W, H);
+	for (int y = 0; y < H; y++)
+		assert_int_equal(fwrite(row, 1, W, f), W);
+	assert_int_equal(fclose(f), 0);
+}
+
+/*
+ * Out of memory says so. 6000x4000 frames with distortion need about 400 MB of undistortion
+ * maps, which OpenCV allocates; under address-space limits from 400 to 900 MB mvod fails
+ * there (or not at all), and OpenCV's failure used to come out as "Input/output error". The
+ * limits are a range, not one value, since the address space mvod needs to start differs
+ * between machines (thread stacks, libraries); at least one must hit the maps.
+ */
+static void test_out_of_memory(void **state)
+{
+	(void)state;
+	struct run_result r;
+	char *probe[] = {"/usr/bin/prlimit", "--version", NULL};
+	if (harness_run(probe, &r) || !r.exited || r.status)
+		skip();
+	char dir[300], path[400], src[310], cal[300], as[32];
+	snprintf(dir, sizeof(dir), "%s/big", harness_tmpdir());
+	assert_int_equal(mkdir(dir, 0755), 0);
+	for (int i = 0; i < 2; i++) {
+		snprintf(path, sizeof(path), "%s/%06d.pgm", dir, i);
+		write_big_pgm(path);
+	}
+	snprintf(src, sizeof(src), "images:%s", dir);
+	snprintf(cal, sizeof(cal), "%s/big.json", harness_tmpdir());
+	harness_write_file(cal, "{\"format\": \"mvod-calibration/1\", \"model\": \"pinhole-radtan\", "
+				"\"image_size\": [6000, 4000], \"K\": [[5000, 0, 3000], [0, 5000, 2000], "
+				"[0, 0, 1]], \"distortion\": [-0.1, 0.01, 0, 0, 0]}\n");
+	int nomem = 0;
+	for (int mb = 400; mb <= 900; mb += 100) {
+		snprintf(as, sizeof(as), "--as=%lld", (long long)mb << 20);
+		char *argv[] = {"/usr/bin/prlimit", as, (char *)harness_bin("MVOD"), "--no-lcm", "-q",
+				"--source", src, "--calib", cal, NULL};
+		assert_int_equal(harness_run(argv, &r), 0);
+		if (strstr(r.err, "Input/output error"))
+			fail_msg("under %d MB: %s", mb, r.err);
+		nomem += strstr(r.err, "Cannot allocate memory") != NULL;
+	}
+	assert_true(nomem > 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -147,6 +203,7 @@ int main(void)
 		cmocka_unit_test(test_image_too_small),
 		cmocka_unit_test(test_bom),
 		cmocka_unit_test(test_empty_calibration),
+		cmocka_unit_test(test_out_of_memory),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
