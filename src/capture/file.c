@@ -160,6 +160,8 @@ static int paced_read(struct file_source *fs, struct mvod_frame *frame)
 {
 	if (!fs->pending) {
 		int ret = decode_next(fs, &fs->held);
+		if (ret == -EINVAL)
+			*frame = fs->held; /* which frame was bad, and why */
 		if (ret < 0)
 			return ret;
 		fs->pending = true;
