@@ -180,7 +180,7 @@ static void test_out_of_memory(void **state)
 	harness_write_file(cal, "{\"format\": \"mvod-calibration/1\", \"model\": \"pinhole-radtan\", "
 				"\"image_size\": [6000, 4000], \"K\": [[5000, 0, 3000], [0, 5000, 2000], "
 				"[0, 0, 1]], \"distortion\": [-0.1, 0.01, 0, 0, 0]}\n");
-	int nomem = 0;
+	int nomem = 0, started = 0;
 	for (int mb = 400; mb <= 900; mb += 100) {
 		snprintf(as, sizeof(as), "--as=%lld", (long long)mb << 20);
 		char *argv[] = {"/usr/bin/prlimit", as, (char *)harness_bin("MVOD"), "--no-lcm", "-q",
@@ -189,7 +189,11 @@ static void test_out_of_memory(void **state)
 		if (strstr(r.err, "Input/output error"))
 			fail_msg("under %d MB: %s", mb, r.err);
 		nomem += strstr(r.err, "Cannot allocate memory") != NULL;
+		started += strstr(r.err, "mvod: ") != NULL;
 	}
+	/* Under AddressSanitizer mvod cannot start in so small an address space (its shadow). */
+	if (!started)
+		skip();
 	assert_true(nomem > 0);
 }
 
