@@ -11,7 +11,7 @@ DESTDIR  ?=
 # Exactly what the build, the tests and the demo need from Debian 12.
 DEBS := gcc g++ make pkg-config meson ninja-build \
 	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev libcmocka-dev \
-	libyaml-dev libxml2-dev libjpeg62-turbo-dev libcamera-dev zlib1g-dev libinih-dev libsystemd-dev \
+	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev libcamera-dev zlib1g-dev libinih-dev libsystemd-dev \
 	libceres-dev \
 	clang libclang-rt-14-dev valgrind
 

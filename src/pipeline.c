@@ -51,6 +51,7 @@ struct run {
 	struct mvod_traj_writer *traj;
 	struct mvod_ipc *ipc;
 	struct mvod_path est_path, gt_path;
+	struct mvod_path est_at_gt; /* the estimate at the frames gt_path has: the ATE's pairs */
 	struct mvod_pose prev_est, prev_gt;
 	int have_prev, prev_had_gt; /* a frame has been recorded; it had a ground-truth pose */
 	struct mvod_run_summary *sum;
@@ -111,6 +112,11 @@ static int open_camera(struct run *r)
 		    r->cam.width, r->cam.height, o->source, r->info.width, r->info.height);
 		return -EINVAL;
 	}
+	if (mvod_camera_check(&r->cam, err, sizeof(err))) {
+		LOG(ERROR, "calibration %s cannot be a camera of %dx%d: %s; is it this camera's?",
+		    o->calib ? o->calib : o->source, r->cam.width, r->cam.height, err);
+		return -EINVAL;
+	}
 	if (isnan(r->info.focus))
 		return 0;
 	LOG(INFO, "%s: autofocus off, focus held at %g", o->source, r->info.focus);
@@ -169,6 +175,11 @@ static int open_inputs(struct run *r)
 	ret = open_gt(r);
 	if (ret)
 		return ret;
+	ret = mvod_vo_check_size(&o->vo, &r->cam, err, sizeof(err));
+	if (ret) {
+		LOG(ERROR, "%s: %s", o->source, err);
+		return ret;
+	}
 	ret = mvod_vo_create(&o->vo, &r->cam, &r->vo);
 	if (ret)
 		LOG(ERROR, "cannot set up visual odometry for %dx%d: %s", r->cam.width,
@@ -195,7 +206,8 @@ static int open_outputs(struct run *r)
 		LOG(ERROR, "%s", err);
 		return ret;
 	}
-	if (mvod_path_init(&r->est_path, PATH_POINTS) || mvod_path_init(&r->gt_path, PATH_POINTS))
+	if (mvod_path_init(&r->est_path, PATH_POINTS) || mvod_path_init(&r->gt_path, PATH_POINTS) ||
+	    mvod_path_init(&r->est_at_gt, PATH_POINTS))
 		return -ENOMEM;
 	return 0;
 }
@@ -321,6 +333,9 @@ static int record(struct run *r, const struct mvod_frame *f, const struct mvod_v
 	mvod_path_add(&r->est_path, res->pose.t);
 	if (gt) {
 		mvod_path_add(&r->gt_path, gt->t);
+		mvod_path_add(&r->est_at_gt, res->pose.t);
+		s->gt_last = f->index;
+		s->gt_first = s->gt_frames++ ? s->gt_first : f->index;
 		if (r->prev_had_gt) {
 			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
 			s->path_len_m += mvod_vec3_dist(gt->t, r->prev_gt.t);
@@ -439,13 +454,18 @@ static void between_frames(struct run *r)
 		reopen_outputs(r);
 }
 
-/* One bad frame (undecodable, or of another size) is skipped, not fatal. */
+/*
+ * One bad frame (undecodable, too large, of another size) is skipped, not fatal; counted by
+ * reason for the summary, and logged the first time of each reason only.
+ */
 static void skip_unreadable(struct run *r, const struct mvod_frame *f)
 {
-	if (fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE))
-		LOG(WARN, "%s: frame %lld cannot be decoded at %dx%d (corrupt, empty or resized): "
-			  "skipped; later ones are skipped too, without a message", r->o->source,
-		    (long long)f->index, r->info.width, r->info.height);
+	fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+	if (r->sum->skipped[f->bad]++ == 0)
+		LOG(WARN, "%s: frame %lld is %s (the sequence is %dx%d): skipped; later frames "
+			  "skipped for this reason are only counted, in the summary",
+		    r->o->source, (long long)f->index, mvod_bad_frame_name(f->bad), r->info.width,
+		    r->info.height);
 }
 
 /* A read that failed for good: the run ends with the reason. */
@@ -580,6 +600,37 @@ static void align_for_plot(struct run *r, const double R[9], const double t[3], 
 	r->plot_aligned = 1;
 }
 
+/* A ground truth whose poses all lie within this of its first is static (metres). */
+#define STATIC_GT_M 1e-3
+
+/*
+ * The ATE over the frames that have a ground-truth pose, if any do. Where no alignment exists
+ * (a static ground truth, or an estimate that does not move), the ATE is NAN and the summary
+ * says why, with how far the estimate went: an alignment would shrink it onto the still
+ * ground truth and report 0.
+ */
+static void summarise_accuracy(struct run *r)
+{
+	struct mvod_run_summary *s = r->sum;
+	const struct mvod_path *g = &r->gt_path, *e = &r->est_at_gt;
+	s->have_gt = g->n > 0;
+	s->ate_rmse_m = s->ate_scale = NAN;
+	if (!s->have_gt)
+		return;
+	double gt_len, gt_extent;
+	mvod_path_motion(r->est_path.xyz, r->est_path.n, &s->est_len, &s->est_extent);
+	mvod_path_motion(g->xyz, g->n, &gt_len, &gt_extent);
+	s->gt_static = gt_extent <= STATIC_GT_M;
+	double R[9], t[3], sc;
+	bool sim3 = r->o->vo.scale_mode == MVOD_SCALE_MODE_AUTO;
+	if (s->gt_static || mvod_umeyama(e->xyz, g->xyz, g->n, sim3, R, t, &sc) != 0)
+		return;
+	s->ate_rmse_m = mvod_ate_rmse(e->xyz, g->xyz, g->n, R, t, sc);
+	s->ate_scale = sc;
+	if (sim3)
+		align_for_plot(r, R, t, sc);
+}
+
 static void summarise(struct run *r)
 {
 	struct mvod_run_summary *s = r->sum;
@@ -591,19 +642,7 @@ static void summarise(struct run *r)
 	s->frame_ms_median = hist_quantile(r->frame_hist, s->frames, 0.5);
 	s->frame_ms_p95 = hist_quantile(r->frame_hist, s->frames, 0.95);
 	mvod_rpe_finish(&s->rpe);
-	s->have_gt = r->gt_path.n > 0 && r->gt_path.n == r->est_path.n;
-	if (!s->have_gt)
-		return;
-	double R[9], t[3], sc;
-	bool sim3 = r->o->vo.scale_mode == MVOD_SCALE_MODE_AUTO;
-	if (mvod_umeyama(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, sim3, R, t, &sc) != 0) {
-		s->ate_rmse_m = s->ate_scale = NAN; /* static or too short: no alignment exists */
-		return;
-	}
-	s->ate_rmse_m = mvod_ate_rmse(r->est_path.xyz, r->gt_path.xyz, r->est_path.n, R, t, sc);
-	s->ate_scale = sc;
-	if (sim3)
-		align_for_plot(r, R, t, sc);
+	summarise_accuracy(r);
 }
 
 static int write_plot(struct run *r)
@@ -628,7 +667,7 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 {
 	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_STATE_STARTING,
 			.last_index = -1};
-	memset(summary, 0, sizeof(*summary));
+	*summary = (struct mvod_run_summary){.gt_first = -1, .gt_last = -1};
 	int ret = open_inputs(&r);
 	if (!ret)
 		ret = open_outputs(&r);
@@ -656,6 +695,7 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 		ret = lret;
 	mvod_path_fini(&r.est_path);
 	mvod_path_fini(&r.gt_path);
+	mvod_path_fini(&r.est_at_gt);
 	mvod_vo_destroy(r.vo);
 	mvod_traj_free(&r.gt);
 	mvod_source_close(r.src);

@@ -58,6 +58,15 @@ int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out);
 /* True when any distortion coefficient is non-zero. */
 bool mvod_camera_has_distortion(const struct mvod_camera *cam);
 
+/*
+ * Whether cam (width and height set) can be a real camera of that size: fx and fy within 0.05
+ * to 20 times the width, the principal point within half the image size around the image, and
+ * a lens model that moves every point strictly outward from the principal point up to the
+ * image edge (no fold), at most 4 times as far as a pinhole would. -EINVAL with a one-line
+ * reason giving the value and the range.
+ */
+int mvod_camera_check(const struct mvod_camera *cam, char *err, size_t errlen);
+
 /* The camera matrix [fx 0 cx; 0 fy cy; 0 0 1], row-major (skew is not modelled). */
 void mvod_camera_K(const struct mvod_camera *cam, double K[9]);
 

@@ -18,10 +18,22 @@
 extern "C" {
 #endif
 
+/* Why a read gave -EINVAL (one bad frame, skipped); the run's summary counts each apart. */
+enum mvod_bad_frame {
+	MVOD_BAD_UNREADABLE, /* the file could not be read (I/O error, permissions, vanished) */
+	MVOD_BAD_CORRUPT,    /* not an image, or corrupt */
+	MVOD_BAD_TOO_LARGE,  /* a file larger than any frame of the sequence's size can be */
+	MVOD_BAD_SIZE,       /* of another size than the first frame */
+	MVOD_BAD_COUNT
+};
+/* "corrupt", "of another size", ...: for messages and the summary. */
+const char *mvod_bad_frame_name(enum mvod_bad_frame why);
+
 struct mvod_frame {
 	struct mvod_image img; /* borrowed from the source: valid until the next read or close */
 	int64_t utime;         /* source clock (media time, times.txt), microseconds */
 	int64_t index;         /* 0-based frame number in the source */
+	enum mvod_bad_frame bad; /* why, when the read gave -EINVAL */
 };
 
 struct mvod_source_info {
@@ -45,7 +57,7 @@ struct mvod_source_ops {
 	int (*open)(void *priv, const char *location, char *err, size_t errlen);
 	/*
 	 * 0 = a frame, -ENODATA = end of stream, -EAGAIN = no frame yet, -EINVAL = one bad frame
-	 * (skipped), -ENODEV = the device is gone (a live source is reopened), other -errno =
+	 * (skipped; frame->index and frame->bad say which and why), -ENODEV = the device is gone (a live source is reopened), other -errno =
 	 * failure. into is NULL or a grey image of the source's size, borrowed for the call: a
 	 * source that converts camera buffers writes the frame there instead of into its own
 	 * buffer, and frame->img views it. Sources that decode elsewhere ignore it.

@@ -49,7 +49,7 @@ struct mvod_config_key {
 	char short_flag;           /* or 0 */
 	enum mvod_config_type type;
 	size_t offset;             /* of the field in struct mvod_config */
-	double lo, hi;             /* numbers: the accepted range */
+	double lo, hi;             /* numbers: the accepted range; strings: hi > 0 = longest */
 	bool odd;                  /* ints: odd, or 0 (kernel sizes) */
 	bool optional;             /* strings: empty means none (NULL) */
 	bool flag_value;           /* bools: what the flag sets */

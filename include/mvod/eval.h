@@ -20,6 +20,9 @@ int mvod_umeyama(const double *src, const double *dst, int n, bool with_scale, d
 /* Moves the n points xyz in place to s R xyz + t (the alignment mvod_umeyama found). */
 void mvod_sim3_apply(const double R[9], const double t[3], double s, double *xyz, int n);
 
+/* Length of the path through n points (n x 3), and the farthest of them from the first. */
+void mvod_path_motion(const double *xyz, int n, double *length, double *extent);
+
 /* RMSE of dst - (s R src + t) after mvod_umeyama. */
 double mvod_ate_rmse(const double *src, const double *dst, int n, const double R[9],
 		     const double t[3], double s);

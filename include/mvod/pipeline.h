@@ -6,6 +6,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "mvod/capture.h"
 #include "mvod/eval.h"
 #include "mvod/ipc.h"
 #include "mvod/traj.h"
@@ -48,13 +49,21 @@ struct mvod_run_summary {
 	int64_t frames, tracked, held;
 	bool live;       /* frames came through the capture thread */
 	int64_t dropped; /* frames a live source produced that were not processed */
+	/* frames of a dataset source skipped, by mvod_bad_frame reason (live: in dropped) */
+	int64_t skipped[MVOD_BAD_COUNT];
 	double wall_s, fps;
 	double stage_ms_mean[MVOD_STAGE_COUNT];
 	double stage_ms_max[MVOD_STAGE_COUNT];
 	double frame_ms_median, frame_ms_p95; /* whole frame, within 1 % (a log histogram) */
 	/* with ground truth */
-	int have_gt;
-	double ate_rmse_m;   /* after SE(3) (gt scale) or Sim(3) (auto scale) alignment */
+	int have_gt;         /* some frames had a ground-truth pose */
+	int64_t gt_frames;   /* how many; the accuracy is over these */
+	int64_t gt_first, gt_last; /* index of the first and the last of them; -1 without */
+	int gt_static;       /* every ground-truth pose within 1 mm of the first: no ATE */
+	double est_len, est_extent; /* the estimate's path length and farthest point from its
+				       start, in its own units (metres with --scale gt) */
+	double ate_rmse_m;   /* after SE(3) (gt scale) or Sim(3) (auto scale) alignment; NAN
+				when none exists (static ground truth, or an estimate that does not move) */
 	double ate_scale;    /* the alignment's scale: estimate units to metres (1 for SE(3)) */
 	double path_len_m;   /* ground-truth path length */
 	struct mvod_rpe rpe;

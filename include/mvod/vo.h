@@ -133,6 +133,16 @@ struct mvod_vo_result {
 
 struct mvod_vo;
 
+/* Smallest processed frame, pixels each way: ORB's 31-pixel patch must fit inside it. */
+#define MVOD_VO_MIN_PX 32
+
+/*
+ * Whether frames of cam's size, scaled by params->resize, are large enough for the VO:
+ * -EINVAL with the sizes and the minimum in err when not.
+ */
+int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
+		       char *err, size_t errlen);
+
 /*
  * cam: intrinsics at the source's resolution (width x height); the VO undistorts and scales
  * internally. All buffers are allocated here: mvod_vo_process does not allocate.

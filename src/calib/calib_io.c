@@ -300,16 +300,20 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", &text, NULL, err, errlen);
 	if (ret)
 		return ret;
-	const char *p = text + strspn(text, " \t\r\n");
+	/* A UTF-8 byte order mark (Windows editors write one) is no part of the text. */
+	const char *body = strncmp(text, "\xEF\xBB\xBF", 3) == 0 ? text + 3 : text;
+	const char *p = body + strspn(body, " \t\r\n");
 	enum mvod_calib_format f = MVOD_CALIB_FMT_KITTI;
 	char why[256] = "";
 	const bool json = *p == '{' || *p == '[';
-	if (kitti_only || (!json && strstr(text, "P0:")))
-		ret = kitti_camera(text, cam, why, sizeof(why));
+	if (!*p)
+		ret = mvod_errf(why, sizeof(why), -EINVAL, "the file is empty");
+	else if (kitti_only || (!json && strstr(body, "P0:")))
+		ret = kitti_camera(body, cam, why, sizeof(why));
 	else if (json)
 		ret = json_any_camera(p, cam, &f, why, sizeof(why));
 	else
-		ret = mvod_calib_parse_filestorage(text, cam, &f, why, sizeof(why));
+		ret = mvod_calib_parse_filestorage(body, cam, &f, why, sizeof(why));
 	free(text);
 	if (ret)
 		return mvod_errf(err, errlen, ret, "%s: %s", path, why);

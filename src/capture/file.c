@@ -14,13 +14,15 @@
 
 #include "capture/uri.h"
 #include "capture/video_shim.h"
+#include "capture/video_size.h"
 #include "util/clock.h"
 #include "util/output.h"
 
 /*
  * Containers without a frame index (Matroska, AVI) have their frame count estimated from the
- * file's duration, which covers the audio too; a stream that stops within this much of the
- * count is taken as a normal end, one that stops earlier as broken.
+ * file's duration times the nominal rate: for a variable-rate file, many more frames than it
+ * holds. So a stream is broken only when it stops both short of that count and, by its own
+ * timestamps, more than this much before the duration (which may cover the audio too).
  */
 #define END_SLACK_S 0.5
 
@@ -29,11 +31,14 @@
 
 struct file_source {
 	struct mvod_video *video;
+	struct mvod_vsize *sizes; /* each frame's coded size; NULL when it cannot change */
+	int coded_w, coded_h;     /* the first frame's, 0 before it or when the stream is silent */
 	struct mvod_source_info info;
 	int64_t next;      /* index of the next frame */
 	int64_t last_us;   /* time of the previous frame */
 	int64_t period_us; /* nominal frame period */
-	int64_t short_of;  /* a stream ending before this many frames is broken; <0 = unknown */
+	int64_t short_of;  /* a stream ending before this many frames may be broken; <0 = unknown */
+	int64_t end_us;    /* media time the duration reaches; -1 = unknown */
 	char path[4096];
 	bool realtime;
 	bool pending;          /* held is decoded and waits for its time */
@@ -94,19 +99,50 @@ static int file_open(void *priv, const char *location, char *err, size_t errlen)
 	/* Any strictly increasing time will do when the rate is unknown. */
 	fs->period_us = fs->info.fps > 0 ? llround(1e6 / fs->info.fps) : 1;
 	fs->short_of = fs->info.frames - (int64_t)ceil(END_SLACK_S * fs->info.fps);
+	fs->end_us = fs->info.fps > 0 && fs->info.frames > 0
+			     ? llround((double)fs->info.frames * 1e6 / fs->info.fps) : -1;
 	fs->info.live = fs->realtime;
+	/* Without a parser for the codec its size cannot change in-band: nothing to watch. */
+	if (mvod_vsize_open(path, &fs->sizes) < 0)
+		fs->sizes = NULL;
 	return 0;
 fail:
 	mvod_video_close(fs->video);
 	return ret;
 }
 
+/* The decoder ran dry: the normal end, or -EIO when the file broke off before it. */
+static int stream_end(const struct file_source *fs)
+{
+	int64_t last_us = fs->next ? fs->last_us : -fs->period_us;
+	bool short_of_count = fs->next < fs->short_of;
+	bool short_of_time = fs->end_us >= 0 &&
+			     last_us + fs->period_us < fs->end_us - (int64_t)(END_SLACK_S * 1e6);
+	return short_of_count && short_of_time ? -EIO : -ENODATA;
+}
+
+/*
+ * A frame whose coded size differs from the first frame's: OpenCV squeezes it into the first
+ * size's buffer (see video_size.h), so it is bad, and skipped, whatever its pixels show.
+ */
+static bool resized(struct file_source *fs)
+{
+	int w = 0, h = 0;
+	if (!fs->sizes || mvod_vsize_next(fs->sizes, &w, &h) < 0 || w <= 0 || h <= 0)
+		return false;
+	if (!fs->coded_w) {
+		fs->coded_w = w;
+		fs->coded_h = h;
+	}
+	return w != fs->coded_w || h != fs->coded_h;
+}
+
 static int decode_next(struct file_source *fs, struct mvod_frame *frame)
 {
 	int64_t media_us = 0;
 	int ret = mvod_video_read(fs->video, &frame->img, &media_us);
-	if (ret == -ENODATA && fs->next < fs->short_of)
-		return -EIO;
+	if (ret == -ENODATA)
+		return stream_end(fs);
 	if (ret < 0)
 		return ret;
 	frame->index = fs->next++;
@@ -117,7 +153,10 @@ static int decode_next(struct file_source *fs, struct mvod_frame *frame)
 	bool advances = frame->index == 0 || media_us > fs->last_us;
 	frame->utime = advances ? media_us : fs->last_us + fs->period_us;
 	fs->last_us = frame->utime;
-	return 0;
+	if (!resized(fs))
+		return 0;
+	frame->bad = MVOD_BAD_SIZE;
+	return -EINVAL;
 }
 
 /* The held frame once its media time has come, measured from the first frame's. */
@@ -125,6 +164,8 @@ static int paced_read(struct file_source *fs, struct mvod_frame *frame)
 {
 	if (!fs->pending) {
 		int ret = decode_next(fs, &fs->held);
+		if (ret == -EINVAL)
+			*frame = fs->held; /* which frame was bad, and why */
 		if (ret < 0)
 			return ret;
 		fs->pending = true;
@@ -161,6 +202,7 @@ static void file_info(void *priv, struct mvod_source_info *info)
 static void file_close(void *priv)
 {
 	struct file_source *fs = priv;
+	mvod_vsize_close(fs->sizes);
 	mvod_video_close(fs->video);
 }
 

@@ -20,6 +20,17 @@
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
 
+/*
+ * Bounds on a frame file, checked with fstat before a byte is read, so that one huge file
+ * neither takes gigabytes of memory nor stays in the reused buffer. The first image may be
+ * up to 256 MiB: an uncompressed 16-bit colour 8K frame (7680 x 4320 x 6 bytes) is 199 MB.
+ * Later ones may be as large as the first image's size stored uncompressed at 16 bits and
+ * 3 channels (the largest any format mvod reads makes of it) plus 1 MiB of headers and
+ * metadata (EXIF thumbnails).
+ */
+#define FIRST_MAX_BYTES ((size_t)256 << 20)
+#define HEADER_SLACK_BYTES ((size_t)1 << 20)
+
 static bool is_image_name(const char *name)
 {
 	static const char *const exts[] = {"png", "jpg", "jpeg", "pgm", "ppm",
@@ -66,10 +77,52 @@ static size_t fill_images(DIR *d, const char *dir, char **paths, size_t n, size_
 	return k;
 }
 
+/*
+ * The name's stem (up to the extension) as a number when it is one: digits with at most one
+ * '.', e.g. "1.15" from "DIR/1.15.png" (timestamps as names). Signs and exponents are not
+ * taken: no camera tool names frames so, and "1e3" may as well be a word.
+ */
+static bool stem_number(const char *path, double *v)
+{
+	const char *name = strrchr(path, '/');
+	name = name ? name + 1 : path;
+	const char *ext = strrchr(name, '.');
+	size_t digits = strspn(name, "0123456789");
+	const char *end = name + digits;
+	if (*end == '.' && end != ext)
+		end += 1 + strspn(end + 1, "0123456789");
+	if (digits == 0 || end != ext)
+		return false;
+	*v = strtod(name, NULL);
+	return true;
+}
+
 /* strverscmp, so that 2.png sorts before 10.png. */
 static int compare_paths(const void *a, const void *b)
 {
 	return strverscmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* By the number the names are (1.3 before 1.15 before 2), the version order between equals. */
+static int compare_numbers(const void *a, const void *b)
+{
+	double x = 0, y = 0;
+	stem_number(*(char *const *)a, &x);
+	stem_number(*(char *const *)b, &y);
+	return x < y ? -1 : x > y ? 1 : compare_paths(a, b);
+}
+
+/*
+ * Numeric order when every name is a number, else version order: strverscmp puts 1.15 after
+ * 1.3 (it compares 15 with 3), which is wrong for names that are timestamps in seconds.
+ */
+static void sort_images(char **paths, size_t n)
+{
+	bool numeric = true;
+	double v;
+	for (size_t i = 0; i < n && numeric; i++)
+		numeric = stem_number(paths[i], &v);
+	qsort(paths, n, sizeof(*paths), numeric ? compare_numbers : compare_paths);
 }
 
 static int list_images(struct mvod_images *im, const char *dir, char *err, size_t errlen)
@@ -90,7 +143,7 @@ static int list_images(struct mvod_images *im, const char *dir, char *err, size_
 		}
 		rewinddir(d);
 		im->n = fill_images(d, dir, im->paths, n, bytes);
-		qsort(im->paths, im->n, sizeof(*im->paths), compare_paths);
+		sort_images(im->paths, im->n);
 	}
 	if (im->n == 0)
 		ret = mvod_errf(err, errlen, -ENOENT,
@@ -132,6 +185,13 @@ static int parse_times(FILE *f, const char *path, int64_t *t, size_t n, char *er
 			ret = mvod_errf(err, errlen, -EINVAL,
 						"%s line %zu: \"%.40s\" is not a time in seconds",
 						path, lineno, line);
+			goto out;
+		}
+		if (k > 0 && t[k] <= t[k - 1]) {
+			ret = mvod_errf(err, errlen, -EINVAL,
+					"%s line %zu: %.6f s is not after the line before (%.6f s): "
+					"times must increase, one line per image in name order",
+					path, lineno, t[k] / 1e6, t[k - 1] / 1e6);
 			goto out;
 		}
 		k++;
@@ -185,10 +245,13 @@ static int read_all(int fd, uint8_t *buf, size_t len)
 	return 0;
 }
 
-/* The whole of path into im->buf. */
+/*
+ * The whole of path into im->buf: -EFBIG beyond im->limit, -ENODATA for no regular file.
+ * O_NONBLOCK: a FIFO named like a frame must not block the open.
+ */
 static int read_file(struct mvod_images *im, const char *path, size_t *len)
 {
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
 	if (fd < 0)
 		return -errno;
 	int ret = 0;
@@ -198,6 +261,10 @@ static int read_file(struct mvod_images *im, const char *path, size_t *len)
 		goto out;
 	}
 	size_t size = (size_t)st.st_size;
+	if (!S_ISREG(st.st_mode) || size > im->limit) {
+		ret = S_ISREG(st.st_mode) ? -EFBIG : -ENODATA;
+		goto out;
+	}
 	if (size > im->cap) {
 		uint8_t *grown = realloc(im->buf, size);
 		if (!grown) {
@@ -214,7 +281,10 @@ out:
 	return ret;
 }
 
-/* Image i decoded into the decoder's buffer: -errno from reading, -EINVAL when no image. */
+/*
+ * Image i decoded into the decoder's buffer: -errno from reading (-EFBIG for too large a
+ * file), -EINVAL when it is no image.
+ */
 static int load(struct mvod_images *im, size_t i, struct mvod_image *img)
 {
 	size_t len = 0;
@@ -232,7 +302,15 @@ static int load_first(struct mvod_images *im, char *err, size_t errlen)
 		return mvod_errf(err, errlen, ret, "cannot create an image decoder: %s",
 					 strerror(-ret));
 	struct mvod_image img;
+	im->limit = FIRST_MAX_BYTES;
 	ret = load(im, 0, &img);
+	if (ret == -EFBIG)
+		return mvod_errf(err, errlen, ret, "%s is larger than %zu MiB, more than any camera "
+					 "frame (an uncompressed 16-bit colour 8K frame is 190 MiB): not "
+					 "a frame?", im->paths[0], FIRST_MAX_BYTES >> 20);
+	if (ret == -ENODATA)
+		return mvod_errf(err, errlen, -EINVAL, "%s is not a regular file (a FIFO, device "
+					 "or folder named like an image)", im->paths[0]);
 	if (ret == -EINVAL)
 		return mvod_errf(err, errlen, ret, "cannot decode image %s (corrupt, or "
 					 "not an image)", im->paths[0]);
@@ -241,6 +319,7 @@ static int load_first(struct mvod_images *im, char *err, size_t errlen)
 					 strerror(-ret));
 	im->info.width = img.w;
 	im->info.height = img.h;
+	im->limit = (size_t)img.w * (size_t)img.h * 6 + HEADER_SLACK_BYTES;
 	return 0;
 }
 
@@ -323,7 +402,13 @@ int mvod_images_read(void *priv, struct mvod_frame *frame, const struct mvod_ima
 	frame->index = (int64_t)i;
 	frame->utime = im->times_us ? im->times_us[i] : (int64_t)i * DEFAULT_PERIOD_US;
 	/* One unreadable file is one bad frame (-EINVAL, which callers skip), not a broken source. */
-	return load(im, i, &frame->img) < 0 ? -EINVAL : 0;
+	int ret = load(im, i, &frame->img);
+	if (ret == 0)
+		return 0;
+	frame->bad = ret == -EFBIG    ? MVOD_BAD_TOO_LARGE
+		     : ret == -EINVAL ? MVOD_BAD_CORRUPT
+				      : MVOD_BAD_UNREADABLE;
+	return -EINVAL;
 }
 
 void mvod_images_info(void *priv, struct mvod_source_info *info)

@@ -17,7 +17,8 @@ struct mvod_images {
 	size_t next;              /* index of the next read */
 	int64_t *times_us;        /* n times from times.txt, or NULL for the 10 Hz default */
 	uint8_t *buf;             /* file contents, grown only for a file larger than any before */
-	size_t cap;               /* bytes allocated in buf */
+	size_t cap;               /* bytes allocated in buf, never above limit */
+	size_t limit;             /* largest frame file read, bytes (see images.c) */
 	struct mvod_imgdec *dec;  /* decodes into one reused pixel buffer */
 	struct mvod_source_info info; /* size of the first image, count, rate of the times */
 };

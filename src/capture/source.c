@@ -131,11 +131,25 @@ int mvod_source_read(struct mvod_source *src, struct mvod_frame *frame)
 int mvod_source_read_into(struct mvod_source *src, struct mvod_frame *frame,
 			  const struct mvod_image *into)
 {
+	frame->bad = MVOD_BAD_CORRUPT; /* unless the backend knows better */
 	int ret = src->ops->read(src->priv, frame, into);
 	/* Everything downstream is sized from info at start-up; a frame of another size is bad. */
-	if (ret == 0 && (frame->img.w != src->info.width || frame->img.h != src->info.height))
+	if (ret == 0 && (frame->img.w != src->info.width || frame->img.h != src->info.height)) {
+		frame->bad = MVOD_BAD_SIZE;
 		return -EINVAL;
+	}
 	return ret;
+}
+
+const char *mvod_bad_frame_name(enum mvod_bad_frame why)
+{
+	static const char *const names[MVOD_BAD_COUNT] = {
+		[MVOD_BAD_UNREADABLE] = "unreadable",
+		[MVOD_BAD_CORRUPT] = "corrupt or not an image",
+		[MVOD_BAD_TOO_LARGE] = "too large a file",
+		[MVOD_BAD_SIZE] = "of another size",
+	};
+	return why < MVOD_BAD_COUNT ? names[why] : "bad";
 }
 
 void mvod_source_info(struct mvod_source *src, struct mvod_source_info *info)

@@ -658,6 +658,10 @@ static int bench_one(const struct bench *b)
 		LOG(ERROR, "%s: %d frame(s): a benchmark needs at least two", o.source, c.n);
 		ret = -ENODATA;
 	}
+	if (!ret && s.gt_static)
+		LOG(WARN, "%s: the ground truth does not move, but the estimate went %.3f (farthest "
+			  "%.3f from the start): ATE and the KITTI errors are undefined (\"-\")",
+		    o.source, s.est_len, s.est_extent);
 	if (!ret)
 		ret = whole_run_errors(&c, s.ate_scale, &w);
 	if (!ret) {

@@ -162,30 +162,68 @@ static int parse_cli(int argc, char **argv, struct cli *c, struct mvod_config *c
 	return 0;
 }
 
+/* "; 3 skipped: 2 corrupt or not an image, 1 of another size" for the frames line. */
+static void print_skipped(const struct mvod_run_summary *s)
+{
+	int64_t all = 0;
+	for (int k = 0; k < MVOD_BAD_COUNT; k++)
+		all += s->skipped[k];
+	if (!all)
+		return;
+	printf(", %lld skipped:", (long long)all);
+	const char *sep = " ";
+	for (int k = 0; k < MVOD_BAD_COUNT; k++) {
+		if (!s->skipped[k])
+			continue;
+		printf("%s%lld %s", sep, (long long)s->skipped[k], mvod_bad_frame_name(k));
+		sep = ", ";
+	}
+}
+
+/* Accuracy, or why there is none: never a number that an alignment made up. */
+static void print_accuracy(const struct mvod_config *c, const struct mvod_run_summary *s)
+{
+	const char *unit = c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "m" : "units (free scale)";
+	if (s->gt_frames < s->frames)
+		printf("mvod: ground truth covers frames %lld-%lld of %lld (%lld have a pose): the "
+		       "accuracy below is over those only\n", (long long)s->gt_first,
+		       (long long)s->gt_last, (long long)s->frames, (long long)s->gt_frames);
+	if (s->gt_static) {
+		printf("mvod: accuracy vs ground truth: the ground truth does not move, but the "
+		       "estimate went %.3f %s, and ended up at most %.3f from the start: no ATE\n",
+		       s->est_len, unit, s->est_extent);
+		return;
+	}
+	printf("mvod: accuracy vs ground truth: rotation error %.3f deg/frame (max %.3f), "
+	       "direction error %.2f deg/frame (max %.2f), err_avg %.3f (max %.3f), ",
+	       s->rpe.rot_deg_mean, s->rpe.rot_deg_max, s->rpe.dir_deg_mean, s->rpe.dir_deg_max,
+	       s->rpe.err_avg, s->rpe.err_max);
+	if (isnan(s->ate_rmse_m) && s->gt_frames < 3)
+		printf("ATE n/a (an alignment needs 3 frames with ground truth)\n");
+	else if (isnan(s->ate_rmse_m))
+		printf("ATE n/a (the estimate does not move, while the ground truth goes %.1f m)\n",
+		       s->path_len_m);
+	else
+		printf("ATE %.3f m over %.1f m, %.1f %% (%s)\n", s->ate_rmse_m, s->path_len_m,
+		       100.0 * s->ate_rmse_m / fmax(s->path_len_m, 1e-9),
+		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
+}
+
 static void print_summary(const struct mvod_config *c, const struct mvod_run_summary *s)
 {
 	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held",
 	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held);
 	if (s->live)
 		printf(", %lld dropped", (long long)s->dropped);
+	print_skipped(s);
 	printf("\n");
 	printf("mvod: ms per frame, mean (max):");
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		printf(" %s %.2f (%.1f)", mvod_stage_names[k], s->stage_ms_mean[k], s->stage_ms_max[k]);
 	printf("\nmvod: frame time median %.1f ms, 95th percentile %.1f ms\n", s->frame_ms_median,
 	       s->frame_ms_p95);
-	if (!s->have_gt)
-		return;
-	printf("mvod: accuracy vs ground truth: rotation error %.3f deg/frame (max %.3f), "
-	       "direction error %.2f deg/frame (max %.2f), err_avg %.3f (max %.3f), ",
-	       s->rpe.rot_deg_mean, s->rpe.rot_deg_max, s->rpe.dir_deg_mean, s->rpe.dir_deg_max,
-	       s->rpe.err_avg, s->rpe.err_max);
-	if (isnan(s->ate_rmse_m))
-		printf("ATE n/a (the ground truth does not move)\n");
-	else
-		printf("ATE %.3f m over %.1f m, %.1f %% (%s)\n", s->ate_rmse_m, s->path_len_m,
-		       100.0 * s->ate_rmse_m / fmax(s->path_len_m, 1e-9),
-		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
+	if (s->have_gt)
+		print_accuracy(c, s);
 }
 
 static int print_config(const struct mvod_config *cfg)

@@ -5,17 +5,20 @@
 #include "cli/cli.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <lcm/lcm.h>
 
 #include "mvod/ipc.h"
 #include "mvod/log.h"
 #include "mvod/view.h"
+#include "view/lcmlog.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
 #include "util/output.h"
@@ -162,6 +165,7 @@ struct viewer {
 	const char *url;  /* as given, or from LCM_DEFAULT_URL; NULL for LCM's default */
 	bool is_log;      /* a file:// URL: its end ends the viewer */
 	bool end_of_log;
+	int64_t cut_at;   /* the log is cut short at this byte; -1 when whole */
 	lcm_t *lcm;
 	mvod_pose_t_subscription_t *pose_sub;
 	mvod_status_t_subscription_t *status_sub;
@@ -285,6 +289,48 @@ static int open_lcm(struct viewer *w)
 	return 0;
 }
 
+/*
+ * A log is checked before LCM reads it (view/lcmlog.h): corrupt, it is refused with the place;
+ * only cut short at its end (a writer stopped mid-event), LCM reads it up to there, safely.
+ * A log that cannot be read, or holds no event, is refused too: LCM would only say "check
+ * --lcm-url".
+ */
+static int check_log(struct viewer *w)
+{
+	const char *path = w->url + strlen("file://");
+	char buf[4096];
+	snprintf(buf, sizeof(buf), "%.*s", (int)strcspn(path, "?"), path);
+	int fd = open(buf, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+	if (fd < 0) {
+		LOG(ERROR, "cannot read log %s: %s", buf, strerror(errno));
+		return -errno;
+	}
+	struct mvod_lcmlog_check c;
+	int ret = mvod_lcmlog_check(fd, &c);
+	close(fd);
+	if (ret) {
+		LOG(ERROR, "cannot read log %s: %s", buf, strerror(-ret));
+		return ret;
+	}
+	w->cut_at = c.cut ? c.bad_offset : -1;
+	if (c.events == 0 && (c.bad_offset < 0 || c.cut)) {
+		LOG(ERROR, "log %s holds no whole event (%lld bytes): nothing to show", buf,
+		    (long long)c.size);
+		return -ENODATA;
+	}
+	if (c.bad_offset < 0)
+		return 0;
+	if (c.cut) {
+		LOG(WARN, "log %s is cut short at byte %lld: %s; the %lld whole events before it "
+			  "are shown", buf, (long long)c.bad_offset, c.why, (long long)c.events);
+		return 0;
+	}
+	LOG(ERROR, "log %s is corrupt at byte %lld of %lld: %s; the %lld events before it are "
+		   "intact (truncate -s %lld keeps only them)", buf, (long long)c.bad_offset,
+	    (long long)c.size, c.why, (long long)c.events, (long long)c.bad_offset);
+	return -EIO;
+}
+
 static void close_lcm(struct viewer *w)
 {
 	if (!w->lcm)
@@ -303,18 +349,24 @@ static void print_summary(const struct viewer *w)
 	       mvod_track_state_name(w->view.state));
 	if (w->c->png)
 		printf("; %s written %d times", w->c->png, w->png_writes);
-	printf("%s\n", w->end_of_log ? " (end of log)" : "");
+	if (w->end_of_log && w->cut_at >= 0)
+		printf(" (end of log, cut short at byte %lld)\n", (long long)w->cut_at);
+	else
+		printf("%s\n", w->end_of_log ? " (end of log)" : "");
 }
 
 static int view(const struct cli *c)
 {
-	struct viewer w = {.c = c, .url = c->url ? c->url : getenv("LCM_DEFAULT_URL")};
+	struct viewer w = {.c = c, .url = c->url ? c->url : getenv("LCM_DEFAULT_URL"),
+			   .cut_at = -1};
 	w.is_log = w.url && strncmp(w.url, "file://", 7) == 0;
 	if (mvod_view_init(&w.view, (int)c->max_poses)) {
 		LOG(ERROR, "out of memory for a path of %ld poses", c->max_poses);
 		return EXIT_FAILURE;
 	}
-	int ret = open_lcm(&w);
+	int ret = w.is_log ? check_log(&w) : 0;
+	if (!ret)
+		ret = open_lcm(&w);
 	if (!ret)
 		ret = c->png ? run_headless(&w) : run_window(&w);
 	if (!ret && c->png) {

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include <ini.h>
+#include <lcm/lcm.h>
 
 #include "util/errbuf.h"
 #include "util/read_file.h"
@@ -52,8 +53,10 @@ const struct mvod_config_key mvod_config_keys[] = {
 	 .odd = true},
 	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false},
 	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true},
-	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel)},
-	{LCM("status-channel", "status-channel", MVOD_CONFIG_STRING, status_channel)},
+	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel),
+	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
+	{LCM("status-channel", "status-channel", MVOD_CONFIG_STRING, status_channel),
+	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
 	{LCM("status-rate", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz), .lo = 0.1, .hi = 100},
 	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
 	CHOICE("output", "format", "format", run.traj_format, mvod_traj_format_names),
@@ -172,6 +175,9 @@ static int set_value(struct mvod_config *c, int ki, const char *text, char *err,
 	case MVOD_CONFIG_STRING:
 		if (!*text && !k->optional)
 			return mvod_errf(err, errlen, -EINVAL, "a non-empty value");
+		if (k->hi > 0 && strlen(text) > k->hi)
+			return mvod_errf(err, errlen, -EINVAL, "at most %.0f characters (LCM's limit "
+					 "for a channel name), not %zu", k->hi, strlen(text));
 		drop_string(c, ki);
 		*(const char **)dst = *text ? text : NULL;
 		return 0;

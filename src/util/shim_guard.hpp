@@ -14,8 +14,9 @@ template <typename F> static inline int mvod_guarded(F &&body) noexcept
 		return body();
 	} catch (const std::bad_alloc &) {
 		return -ENOMEM;
-	} catch (const cv::Exception &) {
-		return -EIO;
+	} catch (const cv::Exception &e) {
+		/* OpenCV's own allocator throws this, not std::bad_alloc, when memory runs out. */
+		return e.code == cv::Error::StsNoMem ? -ENOMEM : -EIO;
 	} catch (...) {
 		return -EIO;
 	}

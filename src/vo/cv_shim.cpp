@@ -139,7 +139,7 @@ extern "C" int mvod_cv_desc_bytes(enum mvod_detector kind)
 extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features, int width,
 				       int height, struct mvod_cv_detector **out)
 {
-	if (max_features < 8 || width < 32 || height < 32)
+	if (max_features < 8 || width < MVOD_VO_MIN_PX || height < MVOD_VO_MIN_PX)
 		return -EINVAL;
 	return mvod_guarded([&] {
 		auto *d = new mvod_cv_detector();

@@ -86,6 +86,14 @@ static double path_len(const double *p, int first, int k)
 	return len;
 }
 
+void mvod_path_motion(const double *xyz, int n, double *length, double *extent)
+{
+	*length = n > 1 ? path_len(xyz, 1, n - 1) : 0;
+	*extent = 0;
+	for (int i = 1; i < n; i++)
+		*extent = fmax(*extent, mvod_vec3_dist(xyz + 3 * i, xyz));
+}
+
 int mvod_scale_drift(const double *est, const double *gt, int n, double *drift)
 {
 	if (n < 2)

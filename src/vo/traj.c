@@ -131,6 +131,22 @@ static void pose_from_numbers(enum mvod_traj_format fmt, const double *v, double
 	mvod_quat_to_rot(q, p->R);
 }
 
+/*
+ * A TUM line's quaternion (v[4..7] = qx qy qz qw) must be of unit length: any tool writes it
+ * so to the digits it prints, and one 10 % off is a column mix-up or a zero, not a rotation
+ * (a zero quaternion would give NaN poses in every error).
+ */
+static int check_quaternion(const char *path, int lineno, const double *v, char *err,
+			    size_t errlen)
+{
+	double len = sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
+	if (fabs(len - 1) <= 0.1)
+		return 0;
+	return mvod_errf(err, errlen, -EINVAL, "%s:%d: quaternion (qx qy qz qw) = (%g %g %g %g) "
+			 "has length %g, not 1: no rotation (TUM: t tx ty tz qx qy qz qw)", path,
+			 lineno, v[4], v[5], v[6], v[7], len);
+}
+
 static int traj_push(struct mvod_traj *tr, int *cap, double t, const struct mvod_pose *p)
 {
 	if (tr->n == *cap) {
@@ -196,6 +212,8 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 			ret = bad_line(path, lineno, cols, n, err, errlen);
 			goto out;
 		}
+		if (cols == 8 && (ret = check_quaternion(path, lineno, v, err, errlen)))
+			goto out;
 		double t;
 		struct mvod_pose p;
 		pose_from_numbers(tr.format, v, &t, &p);
@@ -203,7 +221,10 @@ int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t er
 		if (ret)
 			goto out;
 	}
-	if (tr.n == 0)
+	/* getline ends on errors too (a directory: EISDIR), which are no empty file. */
+	if (ferror(f))
+		ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+	else if (tr.n == 0)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s: no poses (an empty file, or only comments)",
 				path);
 out:

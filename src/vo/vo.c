@@ -9,6 +9,7 @@
 #include "match.h"
 #include "motion.h"
 #include "util/clock.h"
+#include "util/errbuf.h"
 
 const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",
 							 "pose"};
@@ -136,6 +137,23 @@ static int alloc_buffers(struct mvod_vo *vo)
 		if (keyframe_init(&vo->kf[i], vo->cap, mvod_cv_desc_bytes(vo->p.detector)))
 			return -ENOMEM;
 	return 0;
+}
+
+int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
+		       char *err, size_t errlen)
+{
+	/* As mvod_cv_preproc_create rounds. */
+	int w = (int)(cam->width * params->resize + 0.5), h = (int)(cam->height * params->resize + 0.5);
+	if (w >= MVOD_VO_MIN_PX && h >= MVOD_VO_MIN_PX)
+		return 0;
+	if (params->resize < 1)
+		return mvod_errf(err, errlen, -EINVAL, "frames of %dx%d are %dx%d after --resize %g, "
+				 "smaller than the %dx%d pixels the feature detector needs: raise "
+				 "--resize", cam->width, cam->height, w, h, params->resize,
+				 MVOD_VO_MIN_PX, MVOD_VO_MIN_PX);
+	return mvod_errf(err, errlen, -EINVAL, "frames of %dx%d are smaller than the %dx%d pixels "
+			 "the feature detector needs", cam->width, cam->height, MVOD_VO_MIN_PX,
+			 MVOD_VO_MIN_PX);
 }
 
 int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,

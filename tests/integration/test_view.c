@@ -298,8 +298,9 @@ static void test_bad_url_fails(void **state)
 		struct run_result r;
 		run_view(args, 4, &r);
 		assert_int_equal(r.status, 1);
-		assert_non_null(strstr(r.err, "cannot open LCM"));
-		assert_non_null(strstr(r.err, urls[i]));
+		/* A missing log is named as such before LCM is asked (test_view_log.c). */
+		assert_non_null(strstr(r.err, i == 0 ? "cannot open LCM at bogus://x"
+						     : "cannot read log /nonexistent/run.lcmlog"));
 		assert_int_equal(access(png, F_OK), -1);
 	}
 }

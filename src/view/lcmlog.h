@@ -1,0 +1,26 @@
+/*
+ * A bounded check of an LCM event log before LCM reads it. LCM 1.3's reader trusts each
+ * event's lengths: an absurd data length makes it allocate (and read into) whatever the
+ * length says, and crash; a bad sync word or channel length mid-log ends its reading as if
+ * the log had ended. This reader looks at the 28-byte event headers only, never allocates
+ * by a length read from the file, and finds the first place where the log stops being a log.
+ */
+#ifndef MVOD_VIEW_LCMLOG_H
+#define MVOD_VIEW_LCMLOG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct mvod_lcmlog_check {
+	int64_t events;   /* whole events before bad_offset (all of them when sound) */
+	int64_t size;     /* bytes in the file */
+	int64_t bad_offset; /* where the first bad event starts; -1 when the log is sound */
+	bool cut;         /* the bad event is the last and only cut short (a writer stopped
+			     mid-event): LCM reads up to it and stops, safely */
+	char why[160];    /* what is wrong at bad_offset, one line */
+};
+
+/* Checks the log open on fd (read with pread). 0, or -errno when it cannot be read. */
+int mvod_lcmlog_check(int fd, struct mvod_lcmlog_check *out);
+
+#endif
