@@ -86,8 +86,6 @@ int mvod_cv_find_essential(const double *x1, const double *x2, int n, bool magsa
 			   double conf, double E[9], uint8_t *mask, int *n_inliers);
 /* The four candidates are (R1, t), (R1, -t), (R2, t), (R2, -t); |t| = 1. */
 int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3]);
-/* A = U diag(S) Vt, S descending. */
-int mvod_cv_svd3(const double A[9], double U[9], double S[3], double Vt[9]);
 
 #ifdef __cplusplus
 }

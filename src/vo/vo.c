@@ -9,6 +9,7 @@
 #include "match.h"
 #include "motion.h"
 #include "util/clock.h"
+#include "util/linalg.h"
 
 const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",
 							 "pose"};
