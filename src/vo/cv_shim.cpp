@@ -172,6 +172,8 @@ extern "C" int mvod_cv_detect(struct mvod_cv_detector *d, const struct mvod_imag
 		for (int i = 0; i < n; i++) {
 			out->kp[i].x = d->kps[(size_t)i].pt.x;
 			out->kp[i].y = d->kps[(size_t)i].pt.y;
+			out->kp[i].octave = d->kps[(size_t)i].octave;
+			out->kp[i].response = d->kps[(size_t)i].response;
 			memcpy(out->desc + (size_t)i * d->desc_bytes, d->desc.ptr(i),
 			       (size_t)d->desc_bytes);
 		}

@@ -11,30 +11,11 @@
 #include "mvod/calib.h"
 #include "mvod/image.h"
 #include "mvod/vo.h"
+#include "types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-#define MVOD_ORB_DESC_BYTES 32
-#define MVOD_SIFT_DESC_BYTES (128 * 4) /* 128 floats */
-
-struct mvod_keypoint {
-	float x, y; /* pixels in the preprocessed image */
-};
-
-/* Caller-owned: kp[cap], desc[cap * desc_bytes]. */
-struct mvod_features {
-	int n, cap;
-	int desc_bytes; /* MVOD_ORB_DESC_BYTES (binary) or MVOD_SIFT_DESC_BYTES (float) */
-	struct mvod_keypoint *kp;
-	uint8_t *desc;
-};
-
-struct mvod_match {
-	int a, b;   /* index into the first and second feature set */
-	float dist; /* descriptor distance: Hamming bits (ORB) or L2 (SIFT) */
-};
 
 /* Undistort (maps computed once), resize, blur, grey: the whole preprocess stage. */
 struct mvod_cv_preproc;

@@ -8,8 +8,8 @@
 
 #include <stdbool.h>
 
-#include "cv_shim.h"
 #include "mvod/vo.h"
+#include "types.h"
 
 struct mvod_match_params {
 	enum mvod_matcher_kind kind;
