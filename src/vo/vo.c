@@ -10,6 +10,20 @@
 #include "motion.h"
 #include "util/clock.h"
 #include "util/linalg.h"
+#include "vo_seam.h"
+
+/*
+ * A rotation-only frame keeps the reference while it shares at least this many times
+ * min_matches with it, so parallax can build up over the next frames; the margin of 2 leaves
+ * the next frame, which overlaps the reference a little less again, above min_matches.
+ */
+#define ROTATION_KEEP_OVERLAP 2
+/*
+ * The best essential-matrix decomposition must have at least this many times the points in
+ * front of both cameras that the runner-up has: with fewer, the structure is too close to
+ * infinity for the direction of translation to be known.
+ */
+#define CHEIRALITY_MARGIN 2
 
 const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",
 							 "pose"};
@@ -72,8 +86,11 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 	};
 }
 
-/* One frame's features and, for the reference frame, the structure seen from it. */
-struct keyframe {
+/*
+ * A frame slot: one frame's features and, for the reference frame, the structure seen from it.
+ * Two slots hold the reference frame and the current one; promote() swaps them.
+ */
+struct frame_slot {
 	struct mvod_features f;
 	double *pts; /* cap * 3: point in this camera's frame, absolute units */
 	uint8_t *has_pt;
@@ -88,8 +105,8 @@ struct mvod_vo {
 	struct mvod_cv_detector *det;
 	struct mvod_matcher *matcher;
 	int cap;
-	struct keyframe kf[2];
-	struct keyframe *ref, *cur;
+	struct frame_slot slot[2]; /* storage behind ref and cur */
+	struct frame_slot *ref, *cur;
 	int have_ref;
 	struct mvod_match *matches;
 	double *x1, *x2, *depth, *prev_pts, *cur_pts, *scratch;
@@ -100,7 +117,7 @@ struct mvod_vo {
 	int have_step;
 };
 
-static int keyframe_init(struct keyframe *k, int cap, int desc_bytes)
+static int slot_init(struct frame_slot *k, int cap, int desc_bytes)
 {
 	k->f.cap = cap;
 	k->f.desc_bytes = desc_bytes;
@@ -111,7 +128,7 @@ static int keyframe_init(struct keyframe *k, int cap, int desc_bytes)
 	return k->f.kp && k->f.desc && k->pts && k->has_pt ? 0 : -ENOMEM;
 }
 
-static void keyframe_fini(struct keyframe *k)
+static void slot_fini(struct frame_slot *k)
 {
 	free(k->f.kp);
 	free(k->f.desc);
@@ -134,7 +151,7 @@ static int alloc_buffers(struct mvod_vo *vo)
 	    !vo->scratch || !vo->mask)
 		return -ENOMEM;
 	for (int i = 0; i < 2; i++)
-		if (keyframe_init(&vo->kf[i], vo->cap, mvod_cv_desc_bytes(vo->p.detector)))
+		if (slot_init(&vo->slot[i], vo->cap, mvod_cv_desc_bytes(vo->p.detector)))
 			return -ENOMEM;
 	return 0;
 }
@@ -163,8 +180,8 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 	ret = alloc_buffers(vo);
 	if (ret)
 		goto fail;
-	vo->ref = &vo->kf[0];
-	vo->cur = &vo->kf[1];
+	vo->ref = &vo->slot[0];
+	vo->cur = &vo->slot[1];
 	mvod_pose_identity(&vo->pose);
 	vo->state = MVOD_STATE_INITIALIZING;
 	*out = vo;
@@ -182,7 +199,7 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	mvod_cv_detector_destroy(vo->det);
 	mvod_matcher_destroy(vo->matcher);
 	for (int i = 0; i < 2; i++)
-		keyframe_fini(&vo->kf[i]);
+		slot_fini(&vo->slot[i]);
 	free(vo->matches);
 	free(vo->x1);
 	free(vo->x2);
@@ -202,7 +219,7 @@ static void promote(struct mvod_vo *vo, const double *gt, bool with_structure)
 {
 	if (!with_structure)
 		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
-	struct keyframe *k = vo->ref;
+	struct frame_slot *k = vo->ref;
 	vo->ref = vo->cur;
 	vo->cur = k;
 	vo->ref->pose = vo->pose;
@@ -361,7 +378,7 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 	 * Two decompositions with nearly as many points in front: the structure is too close to
 	 * infinity for the direction to be known. Keep the rotation, wait for more parallax.
 	 */
-	if (res->inliers < 2 * runner_up)
+	if (res->inliers < CHEIRALITY_MARGIN * runner_up)
 		return rot_ok ? apply_rotation(vo, &rot, res) : MVOD_FRAME_FEW_INLIERS;
 	double s = step_length(vo, n, gt, &res->scale_source);
 	apply_motion(vo, R, t, s);
@@ -372,26 +389,36 @@ static enum mvod_frame_status estimate(struct mvod_vo *vo, const double *gt,
 	return MVOD_FRAME_MOTION;
 }
 
-/* After a frame: move state, and decide whether it becomes the new reference. */
+/*
+ * After a frame: the tracking state, and whether the frame becomes the reference.
+ *
+ *   frame status           state                        becomes the reference
+ *   MOTION                 TRACKING                     yes, with its structure (next scale)
+ *   ROTATION               unchanged                    when it shares fewer than
+ *                                                       ROTATION_KEEP_OVERLAP * min_matches
+ *                                                       matches with the reference
+ *   FIRST, FEW_MATCHES,    TRACKING -> LOST, else same  yes, without structure: rich enough to
+ *   RANSAC_FAILED,                                      start again from
+ *   FEW_INLIERS
+ *   FEW_FEATURES           TRACKING -> LOST, else same  no: nothing to start from
+ */
 static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
 {
 	enum mvod_frame_status st = res->status;
 	if (st == MVOD_FRAME_MOTION) {
 		vo->state = MVOD_STATE_TRACKING;
 		promote(vo, gt, true);
-	} else if (st == MVOD_FRAME_ROTATION) {
-		/* Keep the reference while it still overlaps well, so parallax can build up. */
-		if (res->matches < 2 * vo->p.min_matches)
-			promote(vo, gt, false);
-	} else if (st != MVOD_FRAME_FEW_FEATURES) {
-		/* The first frame, or one not trackable against the reference but rich enough to
-		 * start again from. */
-		if (vo->state == MVOD_STATE_TRACKING)
-			vo->state = MVOD_STATE_LOST;
-		promote(vo, gt, false);
-	} else if (vo->state == MVOD_STATE_TRACKING) {
-		vo->state = MVOD_STATE_LOST;
+		return;
 	}
+	if (st == MVOD_FRAME_ROTATION) {
+		if (res->matches < ROTATION_KEEP_OVERLAP * vo->p.min_matches)
+			promote(vo, gt, false);
+		return;
+	}
+	if (vo->state == MVOD_STATE_TRACKING)
+		vo->state = MVOD_STATE_LOST;
+	if (st != MVOD_FRAME_FEW_FEATURES)
+		promote(vo, gt, false);
 }
 
 void mvod_vo_restart(struct mvod_vo *vo)
@@ -400,45 +427,79 @@ void mvod_vo_restart(struct mvod_vo *vo)
 	vo->state = MVOD_STATE_INITIALIZING;
 }
 
+/*
+ * The current slot's features against the reference: match, estimate, settle. Fills the
+ * result's match and pose stage times, pose and state.
+ */
+static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
+{
+	double t0 = 1e3 * mvod_now_s();
+	int n = vo->cur->f.n;
+	bool matched = false; /* enough matches against the reference to estimate motion */
+	res->features = n;
+	if (!vo->have_ref) {
+		res->status = n >= vo->p.min_matches ? MVOD_FRAME_FIRST : MVOD_FRAME_FEW_FEATURES;
+	} else if (n < vo->p.min_matches) {
+		res->status = MVOD_FRAME_FEW_FEATURES;
+	} else {
+		int ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches, vo->cap,
+				     &res->matches);
+		if (ret)
+			return ret;
+		matched = res->matches >= vo->p.min_matches;
+		res->status = MVOD_FRAME_FEW_MATCHES;
+	}
+	double t1 = 1e3 * mvod_now_s();
+	if (matched)
+		res->status = estimate(vo, gt, res);
+	settle(vo, gt, res);
+	res->pose = vo->pose;
+	res->state = vo->state;
+	res->ms[MVOD_STAGE_MATCH] = t1 - t0;
+	res->ms[MVOD_STAGE_POSE] = 1e3 * mvod_now_s() - t1;
+	return 0;
+}
+
+/* What both entry points check and clear first. */
+static int begin(const struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
+{
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT && !gt)
+		return -EINVAL;
+	memset(res, 0, sizeof(*res));
+	return 0;
+}
+
 int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
 		    struct mvod_vo_result *res)
 {
-	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT && !gt_position)
-		return -EINVAL;
-	memset(res, 0, sizeof(*res));
+	int ret = begin(vo, gt_position, res);
+	if (ret)
+		return ret;
 	double t0 = 1e3 * mvod_now_s();
 	struct mvod_image grey;
-	int ret = mvod_cv_preproc_run(vo->pre, img, &grey);
+	ret = mvod_cv_preproc_run(vo->pre, img, &grey);
 	if (ret)
 		return ret;
 	double t1 = 1e3 * mvod_now_s();
 	ret = mvod_cv_detect(vo->det, &grey, &vo->cur->f);
 	if (ret)
 		return ret;
-	double t2 = 1e3 * mvod_now_s();
-	res->features = vo->cur->f.n;
-	if (!vo->have_ref) {
-		res->status = vo->cur->f.n >= vo->p.min_matches ? MVOD_FRAME_FIRST
-								 : MVOD_FRAME_FEW_FEATURES;
-	} else if (vo->cur->f.n < vo->p.min_matches) {
-		res->status = MVOD_FRAME_FEW_FEATURES;
-	} else {
-		ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches, vo->cap,
-				 &res->matches);
-		if (ret)
-			return ret;
-		res->status = MVOD_FRAME_FEW_MATCHES;
-	}
-	double t3 = 1e3 * mvod_now_s();
-	if (res->status == MVOD_FRAME_FEW_MATCHES && res->matches >= vo->p.min_matches)
-		res->status = estimate(vo, gt_position, res);
-	settle(vo, gt_position, res);
-	double t4 = 1e3 * mvod_now_s();
-	res->pose = vo->pose;
-	res->state = vo->state;
 	res->ms[MVOD_STAGE_PREPROCESS] = t1 - t0;
-	res->ms[MVOD_STAGE_DETECT] = t2 - t1;
-	res->ms[MVOD_STAGE_MATCH] = t3 - t2;
-	res->ms[MVOD_STAGE_POSE] = t4 - t3;
-	return 0;
+	res->ms[MVOD_STAGE_DETECT] = 1e3 * mvod_now_s() - t1;
+	return track(vo, gt_position, res);
+}
+
+int mvod_vo_process_features(struct mvod_vo *vo, const struct mvod_features *f,
+			     const double *gt_position, struct mvod_vo_result *res)
+{
+	struct mvod_features *cur = &vo->cur->f;
+	if (f->n < 0 || f->n > cur->cap || f->desc_bytes != cur->desc_bytes)
+		return -EINVAL;
+	int ret = begin(vo, gt_position, res);
+	if (ret)
+		return ret;
+	memcpy(cur->kp, f->kp, (size_t)f->n * sizeof(*f->kp));
+	memcpy(cur->desc, f->desc, (size_t)f->n * (size_t)f->desc_bytes);
+	cur->n = f->n;
+	return track(vo, gt_position, res);
 }
