@@ -8,22 +8,13 @@
 
 #include "mvod/eval.h"
 #include "mvod/ipc.h"
+#include "mvod/sink.h"
 #include "mvod/traj.h"
 #include "mvod/vo.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* One processed frame, as a benchmark sees it; pointers are borrowed for the call only. */
-struct mvod_frame_report {
-	int64_t index;
-	const struct mvod_pose *est; /* camera-to-world */
-	const struct mvod_pose *gt;  /* NULL when the frame has no ground-truth pose */
-	double frame_ms;             /* capture and every VO stage */
-};
-/* Called after every frame; a negative errno stops the run with that error. */
-typedef int (*mvod_frame_fn)(void *ctx, const struct mvod_frame_report *f);
 
 struct mvod_run_opts {
 	const char *source;     /* URI */
@@ -34,8 +25,12 @@ struct mvod_run_opts {
 	const char *plot;       /* PNG, or NULL */
 	int64_t max_frames;     /* 0 = all */
 	int require_gt;         /* a frame without a ground-truth pose is an error (as --scale gt) */
-	mvod_frame_fn on_frame; /* or NULL */
-	void *on_frame_ctx;
+	/*
+	 * The caller's own sinks (mvod bench's pose collector), borrowed, after the evaluation
+	 * and before the built-in outputs; ops->destroy is not called. NULL when n_sinks is 0.
+	 */
+	const struct mvod_sink *sinks;
+	int n_sinks;
 	double status_hz;       /* periodic mvod.status_t (and systemd STATUS=) rate. 1 */
 	/* Set (by SIGHUP) to have the run reopen its trajectory by name; cleared when done. */
 	volatile sig_atomic_t *reopen;

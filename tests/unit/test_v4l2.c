@@ -862,13 +862,13 @@ struct poses {
 	double R[BEFORE + AFTER][9];
 };
 
-static int on_pose(void *ctx, const struct mvod_frame_report *f)
+static int on_pose(void *ctx, const struct mvod_frame_out *f)
 {
 	struct poses *p = ctx;
 	int i = atomic_load(&p->n);
 	assert_true(i < BEFORE + AFTER);
-	memcpy(p->t[i], f->est->t, sizeof(p->t[i]));
-	memcpy(p->R[i], f->est->R, sizeof(p->R[i]));
+	memcpy(p->t[i], f->res->pose.t, sizeof(p->t[i]));
+	memcpy(p->R[i], f->res->pose.R, sizeof(p->R[i]));
 	atomic_store(&p->n, i + 1);
 	return 0;
 }
@@ -931,8 +931,10 @@ static void test_reconnect_continues_pose(void **state)
 	mvod_run_opts_default(&o);
 	o.source = "v4l2:" DEV "?width=320&height=240&format=GREY";
 	o.calib = calib;
-	o.on_frame = on_pose;
-	o.on_frame_ctx = &got_poses;
+	static const struct mvod_sink_ops pose_ops = {.name = "poses", .frame = on_pose};
+	struct mvod_sink sink = {&pose_ops, &got_poses};
+	o.sinks = &sink;
+	o.n_sinks = 1;
 	struct statuses got = {0};
 	struct mvod_run_summary sum;
 	run_opts(&o, &stop, &got, &sum);
