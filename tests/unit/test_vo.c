@@ -111,15 +111,45 @@ static struct mvod_vo *make_vo(enum mvod_scale_mode scale)
 	return vo;
 }
 
-/* Feeds the view of a camera at pose; returns the result. */
+static struct mvod_vo_result feed_view(struct mvod_vo *vo, const struct view *v)
+{
+	struct mvod_vo_result res;
+	assert_int_equal(mvod_vo_process_features(vo, &v->f, NULL, &res), 0);
+	return res;
+}
+
+/* Feeds the view of points first .. first + count - 1 from a camera at pose. */
+static struct mvod_vo_result feed_range(struct mvod_vo *vo, const struct mvod_pose *pose,
+					int first, int count)
+{
+	static struct view v;
+	project_range(&v, pose, first, count);
+	return feed_view(vo, &v);
+}
+
+/* Feeds the view of the whole scene from a camera at pose. */
 static struct mvod_vo_result feed(struct mvod_vo *vo, const struct mvod_pose *pose)
 {
 	static struct view v;
-	struct mvod_vo_result res;
 	project(&v, pose);
 	assert_true(v.f.n >= 100); /* the scene is in view: these tests are about the VO */
-	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), 0);
-	return res;
+	return feed_view(vo, &v);
+}
+
+static void assert_frame(const struct mvod_vo_result *res, enum mvod_frame_status status,
+			 enum mvod_track_state state)
+{
+	assert_int_equal(res->status, status);
+	assert_int_equal(res->state, state);
+}
+
+/* A motion step with no structure to scale by: as long as the step before (constant speed). */
+static void assert_constant_speed(const struct mvod_vo_result *res,
+				  const struct mvod_vo_result *before)
+{
+	assert_frame(res, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+	assert_int_equal(res->scale_source, MVOD_SCALE_CONSTANT_SPEED);
+	assert_true(res->step_m == before->step_m);
 }
 
 static void assert_pose_equal(const struct mvod_pose *a, const struct mvod_pose *b)
@@ -133,10 +163,8 @@ static void test_first_frame(void **state)
 	struct mvod_pose id = at(0, 0, 0, 0);
 	static struct view v;
 	project(&v, &id);
-	struct mvod_vo_result res;
-	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), 0);
-	assert_int_equal(res.status, MVOD_FRAME_FIRST);
-	assert_int_equal(res.state, MVOD_STATE_INITIALIZING);
+	struct mvod_vo_result res = feed_view(vo, &v);
+	assert_frame(&res, MVOD_FRAME_FIRST, MVOD_STATE_INITIALIZING);
 	assert_int_equal(res.features, v.f.n);
 	assert_int_equal(res.matches, 0);
 	struct mvod_pose identity;
@@ -150,12 +178,8 @@ static void test_few_features_make_no_reference(void **state)
 {
 	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
 	struct mvod_pose id = at(0, 0, 0, 0);
-	static struct view v;
-	project_range(&v, &id, 0, 20);
-	struct mvod_vo_result res;
-	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), 0);
-	assert_int_equal(res.status, MVOD_FRAME_FEW_FEATURES);
-	assert_int_equal(res.state, MVOD_STATE_INITIALIZING);
+	struct mvod_vo_result res = feed_range(vo, &id, 0, 20);
+	assert_frame(&res, MVOD_FRAME_FEW_FEATURES, MVOD_STATE_INITIALIZING);
 	res = feed(vo, &id);
 	assert_int_equal(res.status, MVOD_FRAME_FIRST);
 	mvod_vo_destroy(vo);
@@ -177,8 +201,7 @@ static void test_free_scale_unit_step(void **state)
 	struct mvod_pose p0 = at(0, 0, 0, 0), p1 = at(0.1, 0, 1, 0), p2 = at(0.3, 0, 3, 0);
 	feed(vo, &p0);
 	struct mvod_vo_result res = feed(vo, &p1);
-	assert_int_equal(res.status, MVOD_FRAME_MOTION);
-	assert_int_equal(res.state, MVOD_STATE_TRACKING);
+	assert_frame(&res, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
 	assert_int_equal(res.scale_source, MVOD_SCALE_UNIT);
 	assert_true(res.step_m == 1.0);
 	/* The pose chain's only arithmetic on a unit step: |t| is 1 to rounding. */
@@ -230,27 +253,25 @@ static void test_rotation_keeps_reference(void **state)
 	struct mvod_pose p0 = at(0, 0, 0, 0), yaw = at(0, 0, 0, 1);
 	static struct view all, some;
 	project(&all, &p0);
-	struct mvod_vo_result res;
-	assert_int_equal(mvod_vo_process_features(vo, &all.f, NULL, &res), 0);
+	struct mvod_vo_result res = feed_view(vo, &all);
 	/* Of the first 130 points, those in view: >= 60 shared with the reference, so it is kept. */
 	project_range(&some, &yaw, 0, 130);
 	assert_true(some.f.n >= 60 && some.f.n < all.f.n);
-	assert_int_equal(mvod_vo_process_features(vo, &some.f, NULL, &res), 0);
-	assert_int_equal(res.status, MVOD_FRAME_ROTATION);
-	assert_int_equal(res.state, MVOD_STATE_INITIALIZING);
+	res = feed_view(vo, &some);
+	assert_frame(&res, MVOD_FRAME_ROTATION, MVOD_STATE_INITIALIZING);
 	assert_int_equal(res.scale_source, MVOD_SCALE_NONE);
 	assert_true(fabs(mvod_rot_angle(res.pose.R) * 180 / M_PI - 1) < 1e-3);
 	assert_true(mvod_vec3_norm(res.pose.t) == 0);
 	/* All points again, back at the start: matched against frame 0, so all of them match. */
-	assert_int_equal(mvod_vo_process_features(vo, &all.f, NULL, &res), 0);
+	res = feed_view(vo, &all);
 	assert_int_equal(res.status, MVOD_FRAME_ROTATION);
 	assert_int_equal(res.matches, all.f.n);
 	/* Fewer than 60 shared matches: this rotation frame becomes the reference. */
 	project_range(&some, &yaw, 0, 60);
 	assert_true(some.f.n >= 30 && some.f.n < 60);
-	assert_int_equal(mvod_vo_process_features(vo, &some.f, NULL, &res), 0);
+	res = feed_view(vo, &some);
 	assert_int_equal(res.status, MVOD_FRAME_ROTATION);
-	assert_int_equal(mvod_vo_process_features(vo, &all.f, NULL, &res), 0);
+	res = feed_view(vo, &all);
 	assert_int_equal(res.matches, some.f.n);
 	mvod_vo_destroy(vo);
 }
@@ -287,20 +308,14 @@ static void test_too_few_inliers_is_lost(void **state)
 		v.kp[i] = v.kp[j];
 		v.kp[j] = k;
 	}
-	struct mvod_vo_result res;
-	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), 0);
+	struct mvod_vo_result res = feed_view(vo, &v);
 	assert_int_equal(res.matches, v.f.n);
-	assert_int_equal(res.status, MVOD_FRAME_RANSAC_FAILED);
-	assert_int_equal(res.state, MVOD_STATE_LOST);
+	assert_frame(&res, MVOD_FRAME_RANSAC_FAILED, MVOD_STATE_LOST);
 	assert_pose_equal(&res.pose, &before.pose);
 	res = feed(vo, &p4);
-	assert_int_equal(res.status, MVOD_FRAME_RANSAC_FAILED);
-	assert_int_equal(res.state, MVOD_STATE_LOST);
+	assert_frame(&res, MVOD_FRAME_RANSAC_FAILED, MVOD_STATE_LOST);
 	res = feed(vo, &p5);
-	assert_int_equal(res.status, MVOD_FRAME_MOTION);
-	assert_int_equal(res.state, MVOD_STATE_TRACKING);
-	assert_int_equal(res.scale_source, MVOD_SCALE_CONSTANT_SPEED);
-	assert_true(res.step_m == before.step_m);
+	assert_constant_speed(&res, &before);
 	mvod_vo_destroy(vo);
 }
 
@@ -310,12 +325,8 @@ static void test_few_features_keep_reference(void **state)
 	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
 	struct mvod_vo_result before = start_tracking(vo);
 	struct mvod_pose p3 = at(0, 0, 3, 0);
-	static struct view v;
-	project_range(&v, &p3, 0, 20);
-	struct mvod_vo_result res;
-	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), 0);
-	assert_int_equal(res.status, MVOD_FRAME_FEW_FEATURES);
-	assert_int_equal(res.state, MVOD_STATE_LOST);
+	struct mvod_vo_result res = feed_range(vo, &p3, 0, 20);
+	assert_frame(&res, MVOD_FRAME_FEW_FEATURES, MVOD_STATE_LOST);
 	assert_pose_equal(&res.pose, &before.pose);
 	/* Against the kept reference (frame 2, with structure): scaled by structure again. */
 	res = feed(vo, &p3);
@@ -335,14 +346,10 @@ static void test_restart_keeps_pose(void **state)
 	mvod_vo_restart(vo);
 	struct mvod_pose p5 = at(0, 0, 5, 0), p6 = at(0, 0, 6, 0);
 	struct mvod_vo_result res = feed(vo, &p5);
-	assert_int_equal(res.status, MVOD_FRAME_FIRST);
-	assert_int_equal(res.state, MVOD_STATE_INITIALIZING);
+	assert_frame(&res, MVOD_FRAME_FIRST, MVOD_STATE_INITIALIZING);
 	assert_pose_equal(&res.pose, &before.pose);
 	res = feed(vo, &p6);
-	assert_int_equal(res.status, MVOD_FRAME_MOTION);
-	assert_int_equal(res.state, MVOD_STATE_TRACKING);
-	assert_int_equal(res.scale_source, MVOD_SCALE_CONSTANT_SPEED);
-	assert_true(res.step_m == before.step_m);
+	assert_constant_speed(&res, &before);
 	/*
 	 * Straight ahead by one last step from the held pose: a direction error e (rad) shortens
 	 * the forward part by e^2 / 2, so 1e-6 allows e up to 1e-3 (measured 1e-15).
