@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -60,7 +61,7 @@ extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resi
 	    (blur_ksize && (blur_ksize < 0 || blur_ksize % 2 == 0)))
 		return -EINVAL;
 	return mvod_guarded([&] {
-		auto *p = new mvod_cv_preproc();
+		auto p = std::make_unique<mvod_cv_preproc>();
 		p->in_w = cam->width;
 		p->in_h = cam->height;
 		p->out_w = (int)(cam->width * resize + 0.5);
@@ -78,12 +79,12 @@ extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resi
 		c.model = MVOD_CAM_PINHOLE_RADTAN;
 		p->remap = mvod_camera_has_distortion(cam);
 		if (p->remap)
-			build_maps(p, cam, K_of(&c));
+			build_maps(p.get(), cam, K_of(&c));
 		p->grey.create(p->in_h, p->in_w, CV_8UC1);
 		p->scaled.create(p->out_h, p->out_w, CV_8UC1);
 		p->blurred.create(p->out_h, p->out_w, CV_8UC1);
 		*out_cam = c;
-		*out = p;
+		*out = p.release();
 		return 0;
 	});
 }
@@ -142,7 +143,7 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 	if (max_features < 8 || width < 32 || height < 32)
 		return -EINVAL;
 	return mvod_guarded([&] {
-		auto *d = new mvod_cv_detector();
+		auto d = std::make_unique<mvod_cv_detector>();
 		if (kind == MVOD_DETECTOR_SIFT)
 			d->f2d = cv::SIFT::create(max_features);
 		else
@@ -156,7 +157,7 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 		 * last one, 2001 of 2000 on 3 of 20 KITTI frames, and those frames still do.
 		 */
 		d->desc.create(max_features, d->f2d->descriptorSize(), d->f2d->descriptorType());
-		*out = d;
+		*out = d.release();
 		return 0;
 	});
 }
@@ -212,10 +213,10 @@ static cv::Ptr<cv::DescriptorMatcher> make_matcher(bool binary, bool flann)
 extern "C" int mvod_cv_nn_create(enum mvod_detector kind, bool flann, struct mvod_cv_nn **out)
 {
 	return mvod_guarded([&] {
-		auto *nn = new mvod_cv_nn();
+		auto nn = std::make_unique<mvod_cv_nn>();
 		nn->binary = kind == MVOD_DETECTOR_ORB;
 		nn->m = make_matcher(nn->binary, flann);
-		*out = nn;
+		*out = nn.release();
 		return 0;
 	});
 }
