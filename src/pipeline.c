@@ -172,12 +172,14 @@ static int open_outputs(struct run *r)
 	const struct mvod_sink *eval = &r->sinks[0];
 	for (int i = 0; i < o->n_sinks; i++)
 		ret = add_sink(r, ret, &o->sinks[i], false);
-	ret = add_sink(r, ret ? ret : mvod_sink_notify_create(&m), &m, true);
-	if (r->ipc)
-		ret = add_sink(r, ret ? ret : mvod_sink_lcm_create(r->ipc, &r->faults, &m), &m, true);
-	if (o->plot)
-		ret = add_sink(r, ret ? ret : mvod_sink_plot_create(o->plot, o->source, gt_scale,
-								     eval, &m), &m, true);
+	if (!ret)
+		ret = add_sink(r, mvod_sink_notify_create(&m), &m, true);
+	if (!ret && r->ipc)
+		ret = add_sink(r, mvod_sink_lcm_create(r->ipc, &r->faults, &m), &m, true);
+	if (!ret && o->plot) {
+		ret = mvod_sink_plot_create(o->plot, o->source, gt_scale, eval, &m);
+		ret = add_sink(r, ret, &m, true);
+	}
 	if (ret || !o->trajectory)
 		return ret;
 	ret = mvod_sink_traj_create(o->trajectory, o->traj_format, &r->faults, &m);
