@@ -14,13 +14,14 @@
 # mvod-synth sequences. Outputs go to a temporary folder, removed at the end unless KEEP=1.
 # Prints one line per comparison and exits 1 when any output differs.
 set -euo pipefail
-old=$(realpath "$1")
-new=$(realpath "$2")
 root=$(cd "$(dirname "$0")/.." && pwd)
-synth=${3:-$(dirname "$new")/tools/mvod-synth}
+synth=${3:-$(dirname "$2")/tools/mvod-synth}
 data=${MVOD_DATA:-$root/../shared/data}
 work=$(mktemp -d)
 [ "${KEEP:-0}" = 1 ] && echo "outputs in $work" || trap 'rm -rf "$work"' EXIT
+# Copies, so that a rebuild during the run does not swap a binary under it.
+cp "$1" "$work/mvod.old" && cp "$2" "$work/mvod.new" && cp "$synth" "$work/mvod-synth"
+old=$work/mvod.old new=$work/mvod.new synth=$work/mvod-synth
 fail=0
 
 # Decodes an LCM log into what must not change (see above), one line per item.
@@ -67,6 +68,11 @@ EOF
 
 same() { # NAME FILE_OLD FILE_NEW [digest]
 	local name=$1 a=$2 b=$3 how=${4:-}
+	if [ ! -f "$a" ] || [ ! -f "$b" ]; then
+		echo "DIFFERENT $name (only one build wrote it)"
+		fail=1
+		return
+	fi
 	if [ -n "$how" ]; then
 		"$how" "$a" >"$a.digest" && "$how" "$b" >"$b.digest"
 		a=$a.digest b=$b.digest

@@ -44,6 +44,14 @@ int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 			  const struct mvod_vo_result *res);
 int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st);
 
+/*
+ * The one conversion between struct mvod_status and the generated mvod.status_t
+ * (mvod_status_t.h), both ways: publishing uses the first, mvod view the second.
+ */
+struct _mvod_status_t;
+void mvod_status_to_msg(const struct mvod_status *st, struct _mvod_status_t *msg);
+void mvod_status_from_msg(const struct _mvod_status_t *msg, struct mvod_status *st);
+
 #ifdef __cplusplus
 }
 #endif
