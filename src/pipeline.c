@@ -27,6 +27,13 @@
 #define FT_MIN_MS 0.01
 #define FT_GROWTH 1.01
 
+const char *mvod_run_state_name(enum mvod_run_state s)
+{
+	static const char *const names[] = {"STARTING", "INITIALIZING", "TRACKING",
+					    "LOST",     "SOURCE_DOWN",  "STOPPING"};
+	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "UNKNOWN";
+}
+
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
 	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM, .status_hz = 1};
@@ -48,7 +55,7 @@ struct run {
 	double stage_total[MVOD_STAGE_COUNT];
 	uint32_t frame_hist[FT_BINS];
 	double t_start, last_status;
-	enum mvod_track_state state;
+	enum mvod_run_state state;
 	struct mvod_frame last_frame;      /* for status messages sent between frames */
 	struct mvod_vo_result last_res;
 	struct mvod_capture *cap;          /* live sources: their capture thread */
@@ -275,7 +282,7 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		st.stage_ms[k] = r->stage_total[k] / n;
-	sinks_status(r, &st, r->faults.status_due || r->state == MVOD_STATE_STOPPING);
+	sinks_status(r, &st, r->faults.status_due || r->state == MVOD_RUN_STOPPING);
 	r->last_status = now;
 	r->faults.status_due = false;
 }
@@ -323,11 +330,12 @@ static double record(struct run *r, const struct mvod_frame *f, const struct mvo
 	s->frames++;
 	s->tracked += res->status == MVOD_FRAME_MOTION || res->status == MVOD_FRAME_ROTATION;
 	double frame_ms = record_times(r, res);
-	if (res->state != r->state) {
+	enum mvod_run_state state = (enum mvod_run_state)res->state; /* same values */
+	if (state != r->state) {
 		LOG(INFO, "frame %lld: %s -> %s (%s)", (long long)f->index,
-		    mvod_track_state_name(r->state), mvod_track_state_name(res->state),
+		    mvod_run_state_name(r->state), mvod_run_state_name(state),
 		    mvod_frame_status_name(res->status));
-		r->state = res->state;
+		r->state = state;
 		r->faults.status_due = true; /* a state change is news: status goes with this frame */
 	}
 	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)",
@@ -444,11 +452,11 @@ static void report_down(struct run *r)
 {
 	if (!mvod_capture_down(r->cap))
 		return;
-	bool changed = r->state != MVOD_STATE_SOURCE_DOWN;
+	bool changed = r->state != MVOD_RUN_SOURCE_DOWN;
 	if (changed)
-		LOG(INFO, "%s -> %s", mvod_track_state_name(r->state),
-		    mvod_track_state_name(MVOD_STATE_SOURCE_DOWN));
-	r->state = MVOD_STATE_SOURCE_DOWN;
+		LOG(INFO, "%s -> %s", mvod_run_state_name(r->state),
+		    mvod_run_state_name(MVOD_RUN_SOURCE_DOWN));
+	r->state = MVOD_RUN_SOURCE_DOWN;
 	r->faults.status_due |= changed;
 	if (r->faults.status_due || status_periodic_due(r))
 		publish_status(r, &r->last_frame, &r->last_res);
@@ -515,7 +523,7 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 static void report_stop(struct run *r)
 {
 	if (r->sum->frames) {
-		r->state = MVOD_STATE_STOPPING;
+		r->state = MVOD_RUN_STOPPING;
 		publish_status(r, &r->last_frame, &r->last_res);
 	}
 }
@@ -535,7 +543,7 @@ static void summarise(struct run *r)
 int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile sig_atomic_t *stop,
 	     struct mvod_run_summary *summary)
 {
-	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_STATE_STARTING,
+	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_RUN_STARTING,
 			.last_index = -1};
 	memset(summary, 0, sizeof(*summary));
 	int ret = open_inputs(&r);

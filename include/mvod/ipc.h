@@ -15,18 +15,7 @@ extern "C" {
 #define MVOD_DEFAULT_POSE_CHANNEL "MVOD_POSE"
 #define MVOD_DEFAULT_STATUS_CHANNEL "MVOD_STATUS"
 
-struct mvod_status {
-	int64_t utime;   /* source clock of the last frame, microseconds */
-	double fps;      /* frames processed per wall-clock second */
-	double stage_ms[MVOD_STAGE_COUNT]; /* mean per-stage milliseconds */
-	int features, matches, inliers; /* of the last frame */
-	int64_t frames, dropped;
-	int64_t rss_kb;
-	double uptime_s;
-	enum mvod_track_state state;
-	int32_t faults; /* mvod.status_t FAULT_ bits */
-};
-
+struct mvod_status; /* mvod/pipeline.h */
 struct mvod_ipc;
 
 /*

@@ -16,6 +16,34 @@
 extern "C" {
 #endif
 
+/*
+ * The daemon's state, as status messages and mvod view report it: while frames flow, the VO's
+ * tracking state (the same values), around that the daemon's own. Values are mvod.pose_t's
+ * and mvod.status_t's STATE_ constants (pinned in src/ipc/ipc.c).
+ */
+enum mvod_run_state {
+	MVOD_RUN_STARTING = 0, /* before the first frame */
+	MVOD_RUN_INITIALIZING = MVOD_STATE_INITIALIZING,
+	MVOD_RUN_TRACKING = MVOD_STATE_TRACKING,
+	MVOD_RUN_LOST = MVOD_STATE_LOST,
+	MVOD_RUN_SOURCE_DOWN = 4, /* a live source went away; the capture thread reopens it */
+	MVOD_RUN_STOPPING = 5,    /* the last status of a run */
+};
+const char *mvod_run_state_name(enum mvod_run_state s);
+
+/* What mvod.status_t carries: the daemon's health, published by the run, shown by mvod view. */
+struct mvod_status {
+	int64_t utime;   /* source clock of the last frame, microseconds */
+	double fps;      /* frames processed per wall-clock second */
+	double stage_ms[MVOD_STAGE_COUNT]; /* mean per-stage milliseconds */
+	int features, matches, inliers; /* of the last frame */
+	int64_t frames, dropped;
+	int64_t rss_kb;
+	double uptime_s;
+	enum mvod_run_state state;
+	int32_t faults; /* mvod.status_t FAULT_ bits */
+};
+
 struct mvod_run_opts {
 	const char *source;     /* URI */
 	const char *calib;      /* file, or NULL when the source carries intrinsics */

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mvod/pipeline.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
 
@@ -14,12 +15,12 @@
  * constants, so each value is pinned to its constant here (types change only additively).
  */
 #define SAME(a, b) _Static_assert((int)(a) == (b), #a " is not " #b " on the wire")
-SAME(MVOD_STATE_STARTING, MVOD_POSE_T_STATE_STARTING);
+SAME(MVOD_RUN_STARTING, MVOD_POSE_T_STATE_STARTING);
 SAME(MVOD_STATE_INITIALIZING, MVOD_POSE_T_STATE_INITIALIZING);
 SAME(MVOD_STATE_TRACKING, MVOD_POSE_T_STATE_TRACKING);
 SAME(MVOD_STATE_LOST, MVOD_POSE_T_STATE_LOST);
-SAME(MVOD_STATE_SOURCE_DOWN, MVOD_POSE_T_STATE_SOURCE_DOWN);
-SAME(MVOD_STATE_STOPPING, MVOD_POSE_T_STATE_STOPPING);
+SAME(MVOD_RUN_SOURCE_DOWN, MVOD_POSE_T_STATE_SOURCE_DOWN);
+SAME(MVOD_RUN_STOPPING, MVOD_POSE_T_STATE_STOPPING);
 SAME(MVOD_SCALE_NONE, MVOD_POSE_T_SCALE_NONE);
 SAME(MVOD_SCALE_STRUCTURE, MVOD_POSE_T_SCALE_STRUCTURE);
 SAME(MVOD_SCALE_CONSTANT_SPEED, MVOD_POSE_T_SCALE_CONSTANT_SPEED);
@@ -198,7 +199,7 @@ void mvod_status_from_msg(const mvod_status_t *msg, struct mvod_status *st)
 		.dropped = msg->dropped_frames,
 		.rss_kb = msg->rss_kb,
 		.uptime_s = msg->uptime_s,
-		.state = (enum mvod_track_state)msg->state,
+		.state = (enum mvod_run_state)msg->state,
 		.faults = msg->faults,
 	};
 }

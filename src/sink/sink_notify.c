@@ -1,6 +1,7 @@
 /* The systemd sink (Type=notify): readiness, watchdog, a status line, stopping. Stateless. */
 #include "mvod/sink.h"
 
+#include "mvod/pipeline.h"
 #include "util/notify.h"
 
 static int notify_frame(void *ctx, const struct mvod_frame_out *f)
@@ -12,7 +13,7 @@ static int notify_frame(void *ctx, const struct mvod_frame_out *f)
 static void notify_status(void *ctx, const struct mvod_status *st, bool news)
 {
 	mvod_notify_status(news, "%s, %.1f fps, %lld frames, %lld dropped",
-			   mvod_track_state_name(st->state), st->fps, (long long)st->frames,
+			   mvod_run_state_name(st->state), st->fps, (long long)st->frames,
 			   (long long)st->dropped);
 }
 

@@ -16,7 +16,7 @@
 
 int mvod_view_init(struct mvod_view *v, int max_poses)
 {
-	*v = (struct mvod_view){.state = MVOD_STATE_STARTING, .pose_hz = NAN};
+	*v = (struct mvod_view){.state = MVOD_RUN_STARTING, .pose_hz = NAN};
 	mvod_pose_identity(&v->pose);
 	return mvod_path_init(&v->path, max_poses);
 }
@@ -47,7 +47,7 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 	memcpy(v->pose.t, msg->position, sizeof(v->pose.t));
 	mvod_quat_to_rot(msg->orientation, v->pose.R);
 	v->frame = msg->frame;
-	v->state = (enum mvod_track_state)msg->state;
+	v->state = (enum mvod_run_state)msg->state;
 	v->scale_source = msg->scale_source;
 	/* A held frame (SCALE_NONE) has no step, and says nothing about the run's scale. */
 	if (msg->scale_source != MVOD_POSE_T_SCALE_NONE)
@@ -64,7 +64,7 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 void mvod_view_add_status(struct mvod_view *v, const mvod_status_t *msg)
 {
 	v->statuses++;
-	v->state = (enum mvod_track_state)msg->state;
+	v->state = (enum mvod_run_state)msg->state;
 	mvod_status_from_msg(msg, &v->status);
 }
 

@@ -28,13 +28,6 @@ const char *mvod_frame_status_name(enum mvod_frame_status s)
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
 }
 
-const char *mvod_track_state_name(enum mvod_track_state s)
-{
-	static const char *const names[] = {"STARTING", "INITIALIZING", "TRACKING",
-					    "LOST",     "SOURCE_DOWN",  "STOPPING"};
-	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "UNKNOWN";
-}
-
 const char *mvod_scale_source_name(enum mvod_scale_source s)
 {
 	static const char *const names[] = {"none", "structure", "constant-speed", "ground-truth",

@@ -820,10 +820,10 @@ static void test_unplug_and_return(void **state)
 	assert_int_equal(F.opens, 2); /* the first and the one after the refusal */
 	assert_true(sum.live);
 	assert_int_equal(sum.frames + sum.dropped, 12);
-	int down = index_of(&got, MVOD_STATE_SOURCE_DOWN, 0);
+	int down = index_of(&got, MVOD_RUN_SOURCE_DOWN, 0);
 	assert_true(down >= 0);
 	assert_true(index_of(&got, MVOD_STATE_INITIALIZING, down) > down);
-	assert_int_equal(got.last.state, MVOD_STATE_STOPPING);
+	assert_int_equal(got.last.state, MVOD_RUN_STOPPING);
 	assert_int_equal(got.last.frames, sum.frames);
 	assert_int_equal(got.last.dropped_frames, sum.dropped);
 }
@@ -845,8 +845,8 @@ static void test_stop_while_down(void **state)
 	run_fake(&stop, &got, &sum);
 	assert_int_equal(F.refused, 2);
 	assert_int_equal(F.opens, 1);
-	assert_true(index_of(&got, MVOD_STATE_SOURCE_DOWN, 0) >= 0);
-	assert_int_equal(got.last.state, MVOD_STATE_STOPPING);
+	assert_true(index_of(&got, MVOD_RUN_SOURCE_DOWN, 0) >= 0);
+	assert_int_equal(got.last.state, MVOD_RUN_STOPPING);
 	assert_int_equal(sum.frames + sum.dropped, 3);
 }
 
@@ -940,7 +940,7 @@ static void test_reconnect_continues_pose(void **state)
 	run_opts(&o, &stop, &got, &sum);
 	free(scenes);
 	assert_int_equal(sum.frames, BEFORE + AFTER); /* the lockstep lost none */
-	assert_true(index_of(&got, MVOD_STATE_SOURCE_DOWN, 0) >= 0);
+	assert_true(index_of(&got, MVOD_RUN_SOURCE_DOWN, 0) >= 0);
 
 	double (*t)[3] = got_poses.t, (*R)[9] = got_poses.R;
 	int last = BEFORE - 1, first = BEFORE, end = BEFORE + AFTER - 1;

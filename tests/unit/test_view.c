@@ -106,7 +106,7 @@ static void test_newest_state_and_rows(void **state)
 	mvod_status_t st = {.state = MVOD_POSE_T_STATE_SOURCE_DOWN, .fps = 29.75f,
 			    .dropped_frames = 7, .rss_kb = 51200, .uptime_s = 3725.4};
 	mvod_view_add_status(&v, &st);
-	assert_int_equal(v.state, MVOD_STATE_SOURCE_DOWN);
+	assert_int_equal(v.state, MVOD_RUN_SOURCE_DOWN);
 	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
 	assert_string_equal(value_of(rows, n, "mvod fps"), "29.8");
 	assert_string_equal(value_of(rows, n, "dropped frames"), "7");
