@@ -68,7 +68,7 @@ test-asan: deps $(ASANDIR)/build.ninja
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
 		meson test -C $(ASANDIR) --suite unit --suite integration --print-errorlogs
 
-# The regression inputs of tests/fuzz/ and 50000 fuzzing runs from a fixed seed per target, so
+# The regression inputs of fuzz/corpus/ and 50000 fuzzing runs from a fixed seed per target, so
 # the result is the same on every machine; skipped without clang. `make fuzz` explores instead.
 test-fuzz:
 	@if $(HAVE_LIBFUZZER); then $(MAKE) --no-print-directory fuzz-run FUZZ_ENV=; \

@@ -4,7 +4,7 @@
 # it (make test), a fixed seed and a fixed number of runs make the test repeatable: what passes
 # here passes in CI, and a failure reproduces with the same command. New inputs go to a folder
 # in the build directory, never the source tree; a crashing input is written to NAME-crash-* here,
-# to keep under tests/fuzz/NAME/ once fixed.
+# to keep under fuzz/corpus/NAME/ once fixed.
 # libFuzzer fails with 77 by default, which meson would read as "skipped": 1 instead.
 set -eu
 exe=$1

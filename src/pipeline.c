@@ -10,16 +10,14 @@
 #include <unistd.h>
 
 #include "mvod/capture.h"
-#include "mvod/eval.h"
 #include "mvod/log.h"
-#include "mvod/plot.h"
 #include "util/clock.h"
 #include "util/notify.h"
 #include "util/output.h"
 #include "mvod_status_t.h"
 
-/* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
-#define PATH_POINTS 20000
+/* The built-in sinks (eval, notify, LCM, plot, trajectory) and the caller's. */
+#define MAX_SINKS 16
 
 /* How long the live loop waits for a frame before it looks at the stop flag again. */
 #define LIVE_WAIT_MS 100
@@ -31,6 +29,13 @@
 #define FT_BINS 1600
 #define FT_MIN_MS 0.01
 #define FT_GROWTH 1.01
+
+const char *mvod_run_state_name(enum mvod_run_state s)
+{
+	static const char *const names[] = {"STARTING", "INITIALIZING", "TRACKING",
+					    "LOST",     "SOURCE_DOWN",  "STOPPING"};
+	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "UNKNOWN";
+}
 
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
@@ -48,25 +53,23 @@ struct run {
 	bool gt_from_source;    /* the dataset's: frames before it begins are skipped when needed */
 	int64_t skipped_lead;   /* frames skipped so */
 	struct mvod_vo *vo;
-	struct mvod_traj_writer *traj;
 	struct mvod_ipc *ipc;
-	struct mvod_path est_path, gt_path;
-	struct mvod_path est_at_gt; /* the estimate at the frames gt_path has: the ATE's pairs */
-	struct mvod_pose prev_est, prev_gt;
-	int have_prev, prev_had_gt; /* a frame has been recorded; it had a ground-truth pose */
+	struct mvod_sink sinks[MAX_SINKS]; /* in the order they are called */
+	bool owned[MAX_SINKS];             /* made here: destroyed here */
+	int n_sinks;
 	struct mvod_run_summary *sum;
 	double stage_total[MVOD_STAGE_COUNT];
 	uint32_t frame_hist[FT_BINS];
 	double t_start, last_status;
-	enum mvod_track_state state;
+	enum mvod_run_state state;
 	struct mvod_frame last_frame;      /* for status messages sent between frames */
 	struct mvod_vo_result last_res;
 	struct mvod_capture *cap;          /* live sources: their capture thread */
 	int epoch;                         /* times the live source came back */
 	int64_t last_index;                /* of the last frame processed, -1 before */
-	bool status_due;                   /* publish status with the next frame */
-	int32_t faults;                    /* mvod.status_t FAULT_ bits seen so far */
-	int plot_aligned; /* the plotted estimate was Sim(3)-aligned to the ground truth */
+	bool restarted;                    /* the VO forgot the scene before the next frame */
+	/* mvod.status_t FAULT_ bits seen so far; status_due: publish status with the next frame */
+	struct mvod_faults faults;
 };
 
 /* Resident set size in KiB; read with read(2) into the stack, since stdio would malloc. */
@@ -187,9 +190,26 @@ static int open_inputs(struct run *r)
 	return ret;
 }
 
+/* Appends a sink made by the caller of mvod_run (owned false) or here (true), after ret 0. */
+static int add_sink(struct run *r, int ret, const struct mvod_sink *made, bool owned)
+{
+	if (ret)
+		return ret;
+	if (r->n_sinks == MAX_SINKS) {
+		if (owned && made->ops->destroy)
+			made->ops->destroy(made->ctx);
+		return -E2BIG;
+	}
+	r->owned[r->n_sinks] = owned;
+	r->sinks[r->n_sinks++] = *made;
+	return 0;
+}
+
 /*
  * Outputs open last, so bad input never leaves an empty or truncated output behind; every one
- * goes through the output policy (util/output.h), and none truncates before its first record.
+ * goes through the output policy (util/output.h), and none truncates before its first record. The
+ * evaluation comes first (the plot draws what it kept), then the caller's sinks (they see
+ * each frame before it is published), systemd, LCM, the plot and the trajectory.
  */
 static int open_outputs(struct run *r)
 {
@@ -198,18 +218,77 @@ static int open_outputs(struct run *r)
 	int ret = o->plot ? mvod_output_check("--plot", o->plot, target, sizeof(target), NULL, err,
 					      sizeof(err))
 			  : 0;
-	if (!ret && o->trajectory)
-		ret = mvod_traj_writer_open(o->trajectory, o->traj_format, &r->traj, err, sizeof(err));
 	if (!ret && r->ipc)
 		ret = mvod_ipc_open_log(r->ipc, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s", err);
 		return ret;
 	}
-	if (mvod_path_init(&r->est_path, PATH_POINTS) || mvod_path_init(&r->gt_path, PATH_POINTS) ||
-	    mvod_path_init(&r->est_at_gt, PATH_POINTS))
-		return -ENOMEM;
-	return 0;
+	struct mvod_sink m;
+	bool gt_scale = o->vo.scale_mode == MVOD_SCALE_MODE_GT;
+	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, &m), &m, true);
+	const struct mvod_sink *eval = &r->sinks[0];
+	for (int i = 0; i < o->n_sinks; i++)
+		ret = add_sink(r, ret, &o->sinks[i], false);
+	if (!ret)
+		ret = add_sink(r, mvod_sink_notify_create(&m), &m, true);
+	if (!ret && r->ipc)
+		ret = add_sink(r, mvod_sink_lcm_create(r->ipc, &r->faults, &m), &m, true);
+	if (!ret && o->plot) {
+		ret = mvod_sink_plot_create(o->plot, o->source, gt_scale, eval, &m);
+		ret = add_sink(r, ret, &m, true);
+	}
+	if (ret || !o->trajectory)
+		return ret;
+	ret = mvod_sink_traj_create(o->trajectory, o->traj_format, &r->faults, &m, err,
+				    sizeof(err));
+	if (ret)
+		LOG(ERROR, "%s", err);
+	return add_sink(r, ret, &m, true);
+}
+
+/* The fan-out: each sink's hook in order. frame and finish return the first error. */
+static int sinks_frame(struct run *r, const struct mvod_frame_out *f)
+{
+	int ret = 0;
+	for (int i = 0; i < r->n_sinks; i++) {
+		const struct mvod_sink *s = &r->sinks[i];
+		int sret = s->ops->frame ? s->ops->frame(s->ctx, f) : 0;
+		ret = ret ? ret : sret;
+	}
+	return ret;
+}
+
+static void sinks_status(struct run *r, const struct mvod_status *st, bool news)
+{
+	for (int i = 0; i < r->n_sinks; i++)
+		if (r->sinks[i].ops->status)
+			r->sinks[i].ops->status(r->sinks[i].ctx, st, news);
+}
+
+static void sinks_between(struct run *r, bool reopen)
+{
+	for (int i = 0; i < r->n_sinks; i++)
+		if (r->sinks[i].ops->between)
+			r->sinks[i].ops->between(r->sinks[i].ctx, reopen);
+}
+
+static int sinks_finish(struct run *r)
+{
+	int ret = 0;
+	for (int i = 0; i < r->n_sinks; i++) {
+		const struct mvod_sink *s = &r->sinks[i];
+		int sret = s->ops->finish ? s->ops->finish(s->ctx, r->sum) : 0;
+		ret = ret ? ret : sret;
+	}
+	return ret;
+}
+
+static void sinks_destroy(struct run *r)
+{
+	for (int i = r->n_sinks - 1; i >= 0; i--)
+		if (r->owned[i] && r->sinks[i].ops->destroy)
+			r->sinks[i].ops->destroy(r->sinks[i].ctx);
 }
 
 /* Ground truth for a frame: KITTI files by index, TUM files by nearest timestamp. */
@@ -234,18 +313,6 @@ static const struct mvod_pose *gt_for(const struct run *r, const struct mvod_fra
 	return fabs(r->gt.t[lo] - t) <= 0.005 ? &r->gt.pose[lo] : NULL;
 }
 
-/*
- * Sets a fault bit; true the first time, when the caller logs it. Later occurrences are only
- * in status, so a fault that repeats every frame does not flood the log.
- */
-static bool fault(struct run *r, int32_t bit)
-{
-	bool first = !(r->faults & bit);
-	r->faults |= bit;
-	r->status_due |= first;
-	return first;
-}
-
 static void publish_status(struct run *r, const struct mvod_frame *f,
 			   const struct mvod_vo_result *res)
 {
@@ -263,18 +330,13 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 		.rss_kb = rss_kb(),
 		.uptime_s = now - r->t_start,
 		.state = r->state,
-		.faults = r->faults,
+		.faults = r->faults.bits,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		st.stage_ms[k] = r->stage_total[k] / n;
-	if (r->ipc && mvod_ipc_publish_status(r->ipc, &st) && fault(r, MVOD_STATUS_T_FAULT_PUBLISH))
-		LOG(ERROR, "publishing status over LCM failed (the transport or log file refused "
-			   "it); mvod carries on, and says no more of it");
-	mvod_notify_status(r->status_due || r->state == MVOD_STATE_STOPPING,
-			   "%s, %.1f fps, %lld frames, %lld dropped", mvod_track_state_name(r->state),
-			   st.fps, (long long)st.frames, (long long)st.dropped);
+	sinks_status(r, &st, r->faults.status_due || r->state == MVOD_RUN_STOPPING);
 	r->last_status = now;
-	r->status_due = false;
+	r->faults.status_due = false;
 }
 
 static void hist_add(uint32_t *hist, double ms)
@@ -313,62 +375,25 @@ static bool status_periodic_due(const struct run *r)
 	return mvod_now_s() - r->last_status >= 1.0 / r->o->status_hz;
 }
 
-static int record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res,
-		  const struct mvod_pose *gt)
+/* The run's own book-keeping of a frame: counts, times, state changes. Returns frame ms. */
+static double record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
 {
 	struct mvod_run_summary *s = r->sum;
 	s->frames++;
 	s->tracked += res->status == MVOD_FRAME_MOTION || res->status == MVOD_FRAME_ROTATION;
 	double frame_ms = record_times(r, res);
-	if (res->state != r->state) {
+	enum mvod_run_state state = (enum mvod_run_state)res->state; /* same values */
+	if (state != r->state) {
 		LOG(INFO, "frame %lld: %s -> %s (%s)", (long long)f->index,
-		    mvod_track_state_name(r->state), mvod_track_state_name(res->state),
+		    mvod_run_state_name(r->state), mvod_run_state_name(state),
 		    mvod_frame_status_name(res->status));
-		r->state = res->state;
-		r->status_due = true; /* a state change is news: status goes out with this frame */
+		r->state = state;
+		r->faults.status_due = true; /* a state change is news: status goes with this frame */
 	}
 	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)",
 	    (long long)f->index, mvod_frame_status_name(res->status), res->features, res->matches,
 	    res->inliers, res->step_m, mvod_scale_source_name(res->scale_source));
-	mvod_path_add(&r->est_path, res->pose.t);
-	if (gt) {
-		mvod_path_add(&r->gt_path, gt->t);
-		mvod_path_add(&r->est_at_gt, res->pose.t);
-		s->gt_last = f->index;
-		s->gt_first = s->gt_frames++ ? s->gt_first : f->index;
-		if (r->prev_had_gt) {
-			mvod_rpe_add(&s->rpe, &r->prev_est, &res->pose, &r->prev_gt, gt);
-			s->path_len_m += mvod_vec3_dist(gt->t, r->prev_gt.t);
-		}
-		r->prev_gt = *gt;
-	}
-	r->prev_had_gt = gt != NULL;
-	r->prev_est = res->pose;
-	r->have_prev = 1;
-	if (!r->o->on_frame)
-		return 0;
-	struct mvod_frame_report rep = {f->index, &res->pose, gt, frame_ms};
-	return r->o->on_frame(r->o->on_frame_ctx, &rep);
-}
-
-static void emit(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
-{
-	if (r->ipc && mvod_ipc_publish_pose(r->ipc, f->utime, f->index, res) &&
-	    fault(r, MVOD_STATUS_T_FAULT_PUBLISH))
-		LOG(ERROR, "frame %lld: publishing the pose over LCM failed (the transport or log "
-			   "file refused it); mvod carries on, and says no more of it (a file:// log "
-			   "ends there, and mvod will exit with status 1)",
-		    (long long)f->index);
-	if (r->status_due || status_periodic_due(r))
-		publish_status(r, f, res);
-	const int32_t traj_fault = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE;
-	if (r->traj && !(r->faults & traj_fault)) {
-		int ret = mvod_traj_writer_add(r->traj, f->utime / 1e6, &res->pose);
-		if (ret && fault(r, traj_fault))
-			LOG(ERROR, "trajectory %s: %s at frame %lld; it is incomplete from there on "
-				   "(poses still go out over LCM) and mvod will exit with status 1",
-			    r->o->trajectory, strerror(-ret), (long long)f->index);
-	}
+	return frame_ms;
 }
 
 /* Why frame f has no ground-truth pose, for a run that needs one for every frame. */
@@ -419,11 +444,13 @@ static int process_frame(struct run *r, const struct mvod_frame *f, double captu
 		return ret;
 	}
 	res.ms[MVOD_STAGE_CAPTURE] = capture_ms;
-	ret = record(r, f, &res, gt);
-	emit(r, f, &res);
+	struct mvod_frame_out out = {f, &res, gt, record(r, f, &res), r->restarted};
+	r->restarted = false;
+	ret = sinks_frame(r, &out);
+	if (r->faults.status_due || status_periodic_due(r))
+		publish_status(r, f, &res);
 	r->last_frame = *f;
 	r->last_res = res;
-	mvod_notify_ready();
 	return ret;
 }
 
@@ -432,26 +459,13 @@ static bool stopped(const struct run *r, volatile sig_atomic_t *stop)
 	return (stop && *stop) || (r->o->max_frames && r->sum->frames >= r->o->max_frames);
 }
 
-/* Log rotation: the trajectory goes on in a new file under its name (SIGHUP). */
-static void reopen_outputs(struct run *r)
-{
-	*r->o->reopen = 0;
-	if (!r->traj)
-		return;
-	char err[512] = "";
-	int ret = mvod_traj_writer_reopen(r->traj, err, sizeof(err));
-	if (ret)
-		LOG(ERROR, "cannot reopen trajectory: %s; still writing to the file open before", err);
-	else
-		LOG(INFO, "reopened trajectory %s", r->o->trajectory);
-}
-
 /* Between frames, in both loops: the watchdog sees the loop turn; a SIGHUP is acted on. */
 static void between_frames(struct run *r)
 {
-	mvod_notify_watchdog();
-	if (r->o->reopen && *r->o->reopen)
-		reopen_outputs(r);
+	bool reopen = r->o->reopen && *r->o->reopen;
+	if (reopen)
+		*r->o->reopen = 0;
+	sinks_between(r, reopen);
 }
 
 /*
@@ -460,7 +474,7 @@ static void between_frames(struct run *r)
  */
 static void skip_unreadable(struct run *r, const struct mvod_frame *f)
 {
-	fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+	mvod_faults_set(&r->faults, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 	if (r->sum->skipped[f->bad]++ == 0)
 		LOG(WARN, "%s: frame %lld is %s (the sequence is %dx%d): skipped; later frames "
 			  "skipped for this reason are only counted, in the summary",
@@ -472,7 +486,7 @@ static void skip_unreadable(struct run *r, const struct mvod_frame *f)
 static int read_failed(struct run *r, int ret)
 {
 	if (ret == -EIO) {
-		fault(r, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
+		mvod_faults_set(&r->faults, MVOD_STATUS_T_FAULT_SOURCE_BROKEN);
 		LOG(ERROR, "%s broke off after %lld frames, before its announced end (a truncated "
 			   "or corrupt file?): the outputs hold the frames before", r->o->source,
 		    (long long)r->sum->frames);
@@ -512,13 +526,13 @@ static void report_down(struct run *r)
 {
 	if (!mvod_capture_down(r->cap))
 		return;
-	bool changed = r->state != MVOD_STATE_SOURCE_DOWN;
+	bool changed = r->state != MVOD_RUN_SOURCE_DOWN;
 	if (changed)
-		LOG(INFO, "%s -> %s", mvod_track_state_name(r->state),
-		    mvod_track_state_name(MVOD_STATE_SOURCE_DOWN));
-	r->state = MVOD_STATE_SOURCE_DOWN;
-	r->status_due |= changed;
-	if (r->status_due || status_periodic_due(r))
+		LOG(INFO, "%s -> %s", mvod_run_state_name(r->state),
+		    mvod_run_state_name(MVOD_RUN_SOURCE_DOWN));
+	r->state = MVOD_RUN_SOURCE_DOWN;
+	r->faults.status_due |= changed;
+	if (r->faults.status_due || status_periodic_due(r))
 		publish_status(r, &r->last_frame, &r->last_res);
 }
 
@@ -530,7 +544,7 @@ static void restart_vo(struct run *r, const struct mvod_frame *f, int epoch)
 {
 	mvod_vo_restart(r->vo);
 	r->epoch = epoch;
-	r->prev_had_gt = 0;
+	r->restarted = true;
 	const double *t = r->last_res.pose.t;
 	LOG(INFO, "frame %lld: tracking re-initialised after the source came back; poses go on "
 		  "from the last one, at (%.3f, %.3f, %.3f)",
@@ -569,7 +583,7 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 			restart_vo(r, &f, epoch);
 		/* Logged by the capture thread; status carries it from this frame on. */
 		if (mvod_capture_saw_unreadable(r->cap))
-			fault(r, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+			mvod_faults_set(&r->faults, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 		r->sum->dropped += f.index - r->last_index - 1;
 		r->last_index = f.index;
 		ret = process_frame(r, &f, (mvod_now_s() - t0) * 1e3);
@@ -583,52 +597,9 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 static void report_stop(struct run *r)
 {
 	if (r->sum->frames) {
-		r->state = MVOD_STATE_STOPPING;
+		r->state = MVOD_RUN_STOPPING;
 		publish_status(r, &r->last_frame, &r->last_res);
 	}
-	mvod_notify_stopping();
-}
-
-/*
- * A free-scale estimate is in units of its first step: drawn raw beside metric ground truth
- * it says nothing. Plot it through the same Sim(3) alignment the ATE uses.
- */
-static void align_for_plot(struct run *r, const double R[9], const double t[3], double sc)
-{
-	mvod_sim3_apply(R, t, sc, r->est_path.xyz, r->est_path.n);
-	mvod_mat3_mul(R, r->prev_est.R, r->prev_est.R);
-	r->plot_aligned = 1;
-}
-
-/* A ground truth whose poses all lie within this of its first is static (metres). */
-#define STATIC_GT_M 1e-3
-
-/*
- * The ATE over the frames that have a ground-truth pose, if any do. Where no alignment exists
- * (a static ground truth, or an estimate that does not move), the ATE is NAN and the summary
- * says why, with how far the estimate went: an alignment would shrink it onto the still
- * ground truth and report 0.
- */
-static void summarise_accuracy(struct run *r)
-{
-	struct mvod_run_summary *s = r->sum;
-	const struct mvod_path *g = &r->gt_path, *e = &r->est_at_gt;
-	s->have_gt = g->n > 0;
-	s->ate_rmse_m = s->ate_scale = NAN;
-	if (!s->have_gt)
-		return;
-	double gt_len, gt_extent;
-	mvod_path_motion(r->est_path.xyz, r->est_path.n, &s->est_len, &s->est_extent);
-	mvod_path_motion(g->xyz, g->n, &gt_len, &gt_extent);
-	s->gt_static = gt_extent <= STATIC_GT_M;
-	double R[9], t[3], sc;
-	bool sim3 = r->o->vo.scale_mode == MVOD_SCALE_MODE_AUTO;
-	if (s->gt_static || mvod_umeyama(e->xyz, g->xyz, g->n, sim3, R, t, &sc) != 0)
-		return;
-	s->ate_rmse_m = mvod_ate_rmse(e->xyz, g->xyz, g->n, R, t, sc);
-	s->ate_scale = sc;
-	if (sim3)
-		align_for_plot(r, R, t, sc);
 }
 
 static void summarise(struct run *r)
@@ -641,31 +612,12 @@ static void summarise(struct run *r)
 		s->stage_ms_mean[k] = s->frames ? r->stage_total[k] / (double)s->frames : 0;
 	s->frame_ms_median = hist_quantile(r->frame_hist, s->frames, 0.5);
 	s->frame_ms_p95 = hist_quantile(r->frame_hist, s->frames, 0.95);
-	mvod_rpe_finish(&s->rpe);
-	summarise_accuracy(r);
-}
-
-static int write_plot(struct run *r)
-{
-	if (!r->o->plot)
-		return 0;
-	char title[256];
-	snprintf(title, sizeof(title), "mvod: %s%s", r->o->source,
-		 r->plot_aligned ? " (Sim(3)-aligned to ground truth)" : "");
-	/* Metres once the ground truth set the scale, by --scale gt or by the Sim(3) alignment. */
-	bool metric = r->plot_aligned || r->o->vo.scale_mode == MVOD_SCALE_MODE_GT;
-	int ret = mvod_plot_topdown(r->o->plot, title, r->est_path.xyz, r->est_path.n,
-				    r->have_prev ? r->prev_est.R : NULL, r->gt_path.xyz, r->gt_path.n,
-				    mvod_plot_unit(metric));
-	if (ret)
-		LOG(ERROR, "cannot write plot %s: %s", r->o->plot, strerror(-ret));
-	return ret;
 }
 
 int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile sig_atomic_t *stop,
 	     struct mvod_run_summary *summary)
 {
-	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_STATE_STARTING,
+	struct run r = {.o = opts, .ipc = ipc, .sum = summary, .state = MVOD_RUN_STARTING,
 			.last_index = -1};
 	*summary = (struct mvod_run_summary){.gt_first = -1, .gt_last = -1};
 	int ret = open_inputs(&r);
@@ -677,25 +629,11 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 		mvod_capture_stop(r.cap);
 		report_stop(&r);
 		summarise(&r);
-		int pret = write_plot(&r);
+		int fret = sinks_finish(&r);
 		if (!ret)
-			ret = pret;
+			ret = fret;
 	}
-	int tret = mvod_traj_writer_close(r.traj);
-	if (tret && !(r.faults & MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE))
-		LOG(ERROR, "trajectory %s: %s", opts->trajectory, strerror(-tret));
-	/* An incomplete trajectory is a failed run, even though the poses went out over LCM. */
-	if (tret && !ret)
-		ret = tret;
-	/* So is an incomplete file:// LCM log (its first failure was logged as FAULT_PUBLISH). */
-	int lret = mvod_ipc_finish(r.ipc);
-	if (lret && !(r.faults & MVOD_STATUS_T_FAULT_PUBLISH))
-		LOG(ERROR, "LCM log %s: %s", mvod_ipc_log_path(r.ipc), strerror(-lret));
-	if (lret && !ret)
-		ret = lret;
-	mvod_path_fini(&r.est_path);
-	mvod_path_fini(&r.gt_path);
-	mvod_path_fini(&r.est_at_gt);
+	sinks_destroy(&r);
 	mvod_vo_destroy(r.vo);
 	mvod_traj_free(&r.gt);
 	mvod_source_close(r.src);

@@ -16,18 +16,7 @@ extern "C" {
 #define MVOD_DEFAULT_POSE_CHANNEL "MVOD_POSE"
 #define MVOD_DEFAULT_STATUS_CHANNEL "MVOD_STATUS"
 
-struct mvod_status {
-	int64_t utime;   /* source clock of the last frame, microseconds */
-	double fps;      /* frames processed per wall-clock second */
-	double stage_ms[MVOD_STAGE_COUNT]; /* mean per-stage milliseconds */
-	int features, matches, inliers; /* of the last frame */
-	int64_t frames, dropped;
-	int64_t rss_kb;
-	double uptime_s;
-	enum mvod_track_state state;
-	int32_t faults; /* mvod.status_t FAULT_ bits */
-};
-
+struct mvod_status; /* mvod/pipeline.h */
 struct mvod_ipc;
 
 /*
@@ -68,6 +57,14 @@ void mvod_ipc_destroy(struct mvod_ipc *ipc);
 int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 			  const struct mvod_vo_result *res);
 int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st);
+
+/*
+ * The one conversion between struct mvod_status and the generated mvod.status_t
+ * (mvod_status_t.h), both ways: publishing uses the first, mvod view the second.
+ */
+struct _mvod_status_t;
+void mvod_status_to_msg(const struct mvod_status *st, struct _mvod_status_t *msg);
+void mvod_status_from_msg(const struct _mvod_status_t *msg, struct mvod_status *st);
 
 #ifdef __cplusplus
 }

@@ -9,6 +9,7 @@
 #include "mvod/capture.h"
 #include "mvod/eval.h"
 #include "mvod/ipc.h"
+#include "mvod/sink.h"
 #include "mvod/traj.h"
 #include "mvod/vo.h"
 
@@ -16,15 +17,33 @@
 extern "C" {
 #endif
 
-/* One processed frame, as a benchmark sees it; pointers are borrowed for the call only. */
-struct mvod_frame_report {
-	int64_t index;
-	const struct mvod_pose *est; /* camera-to-world */
-	const struct mvod_pose *gt;  /* NULL when the frame has no ground-truth pose */
-	double frame_ms;             /* capture and every VO stage */
+/*
+ * The daemon's state, as status messages and mvod view report it: while frames flow, the VO's
+ * tracking state (the same values), around that the daemon's own. Values are mvod.pose_t's
+ * and mvod.status_t's STATE_ constants (pinned in src/ipc/ipc.c).
+ */
+enum mvod_run_state {
+	MVOD_RUN_STARTING = 0, /* before the first frame */
+	MVOD_RUN_INITIALIZING = MVOD_STATE_INITIALIZING,
+	MVOD_RUN_TRACKING = MVOD_STATE_TRACKING,
+	MVOD_RUN_LOST = MVOD_STATE_LOST,
+	MVOD_RUN_SOURCE_DOWN = 4, /* a live source went away; the capture thread reopens it */
+	MVOD_RUN_STOPPING = 5,    /* the last status of a run */
 };
-/* Called after every frame; a negative errno stops the run with that error. */
-typedef int (*mvod_frame_fn)(void *ctx, const struct mvod_frame_report *f);
+const char *mvod_run_state_name(enum mvod_run_state s);
+
+/* What mvod.status_t carries: the daemon's health, published by the run, shown by mvod view. */
+struct mvod_status {
+	int64_t utime;   /* source clock of the last frame, microseconds */
+	double fps;      /* frames processed per wall-clock second */
+	double stage_ms[MVOD_STAGE_COUNT]; /* mean per-stage milliseconds */
+	int features, matches, inliers; /* of the last frame */
+	int64_t frames, dropped;
+	int64_t rss_kb;
+	double uptime_s;
+	enum mvod_run_state state;
+	int32_t faults; /* mvod.status_t FAULT_ bits */
+};
 
 struct mvod_run_opts {
 	const char *source;     /* URI */
@@ -35,8 +54,12 @@ struct mvod_run_opts {
 	const char *plot;       /* PNG, or NULL */
 	int64_t max_frames;     /* 0 = all */
 	int require_gt;         /* a frame without a ground-truth pose is an error (as --scale gt) */
-	mvod_frame_fn on_frame; /* or NULL */
-	void *on_frame_ctx;
+	/*
+	 * The caller's own sinks (mvod bench's pose collector), borrowed, after the evaluation
+	 * and before the built-in outputs; ops->destroy is not called. NULL when n_sinks is 0.
+	 */
+	const struct mvod_sink *sinks;
+	int n_sinks;
 	double status_hz;       /* periodic mvod.status_t (and systemd STATUS=) rate. 1 */
 	/* Set (by SIGHUP) to have the run reopen its trajectory by name; cleared when done. */
 	volatile sig_atomic_t *reopen;

@@ -11,6 +11,7 @@
 
 #include "mvod/geom.h"
 #include "mvod/ipc.h"
+#include "mvod/pipeline.h"
 #include "mvod/traj.h"
 
 #ifdef __cplusplus
@@ -37,7 +38,7 @@ struct mvod_view {
 	/* The latest status (valid once statuses > 0). */
 	struct mvod_status status;
 	/* State of the newest message of either kind: status also reports a source that is down. */
-	enum mvod_track_state state;
+	enum mvod_run_state state;
 	/* Receive clock (LCM's recv_utime) of the newest pose, and the pose rate measured on it. */
 	int64_t last_pose_us, rate_start_us, rate_start_poses;
 	double pose_hz; /* NAN until a second of poses has been seen */

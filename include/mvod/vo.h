@@ -17,14 +17,14 @@
 extern "C" {
 #endif
 
-/* Tracking states; values are those of mvod.pose_t / mvod.status_t. */
+/*
+ * The VO's tracking state. Values are mvod.pose_t's STATE_ constants (pinned in src/ipc/ipc.c);
+ * the daemon's own states around them are enum mvod_run_state (mvod/pipeline.h).
+ */
 enum mvod_track_state {
-	MVOD_STATE_STARTING = 0,
 	MVOD_STATE_INITIALIZING = 1, /* no motion estimated yet */
 	MVOD_STATE_TRACKING = 2,
 	MVOD_STATE_LOST = 3,         /* the last frame could not be tracked; pose held */
-	MVOD_STATE_SOURCE_DOWN = 4,
-	MVOD_STATE_STOPPING = 5,
 };
 
 /* Where the length of a translation step came from. */
@@ -88,7 +88,6 @@ enum mvod_frame_status {
 	MVOD_FRAME_FEW_INLIERS = 6,
 };
 const char *mvod_frame_status_name(enum mvod_frame_status s);
-const char *mvod_track_state_name(enum mvod_track_state s);
 const char *mvod_scale_source_name(enum mvod_scale_source s);
 
 enum mvod_stage {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include <opencv2/aruco/charuco.hpp>
@@ -307,7 +308,7 @@ extern "C" int mvod_calib_det_create(const struct mvod_board *b, struct mvod_cal
 {
 	*out = nullptr;
 	return mvod_guarded([&] {
-		auto *d = new mvod_calib_det();
+		auto d = std::make_unique<mvod_calib_det>();
 		d->board = *b;
 		if (b->kind == MVOD_BOARD_CHARUCO) {
 			d->dict = cv::aruco::getPredefinedDictionary(b->dict);
@@ -321,7 +322,7 @@ extern "C" int mvod_calib_det_create(const struct mvod_board *b, struct mvod_cal
 			 */
 			d->params->cornerRefinementMethod = cv::aruco::CORNER_REFINE_NONE;
 		}
-		*out = d;
+		*out = d.release();
 		return 0;
 	});
 }

@@ -118,9 +118,9 @@ struct mvod_imgdec {
 extern "C" int mvod_imgdec_create(struct mvod_imgdec **out)
 {
 	return mvod_guarded([&] {
-		auto *d = new mvod_imgdec();
+		auto d = std::make_unique<mvod_imgdec>();
 		d->img.allocator = &d->alloc;
-		*out = d;
+		*out = d.release();
 		return 0;
 	});
 }

@@ -343,7 +343,7 @@ struct collect {
  * Grows by doubling: a handful of reallocations over a run, none in the VO itself. The bench
  * needs every pose (KITTI segments reach 800 m back); the daemon keeps none of them.
  */
-static int on_frame(void *ctx, const struct mvod_frame_report *f)
+static int collect_frame(void *ctx, const struct mvod_frame_out *f)
 {
 	struct collect *c = ctx;
 	if (c->n == c->cap) {
@@ -358,11 +358,14 @@ static int on_frame(void *ctx, const struct mvod_frame_report *f)
 			return -ENOMEM;
 		c->cap = cap;
 	}
-	c->est[c->n] = *f->est;
+	c->est[c->n] = f->res->pose;
 	c->gt[c->n] = *f->gt; /* require_gt: every frame has one */
 	c->n++;
 	return 0;
 }
+
+/* The bench's sink: every estimated pose and its ground truth, for the whole-run errors. */
+static const struct mvod_sink_ops collect_ops = {.name = "bench", .frame = collect_frame};
 
 /*
  * Errors over the whole run, from the collected poses, and the per-frame series behind them,
@@ -648,8 +651,9 @@ static int bench_one(const struct bench *b)
 {
 	struct collect c = {0};
 	struct mvod_run_opts o = b->cfg.run;
-	o.on_frame = on_frame;
-	o.on_frame_ctx = &c;
+	struct mvod_sink collector = {&collect_ops, &c};
+	o.sinks = &collector;
+	o.n_sinks = 1;
 	struct mvod_run_summary s;
 	struct whole_run w = {0};
 	struct row row;

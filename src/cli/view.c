@@ -346,7 +346,7 @@ static void print_summary(const struct viewer *w)
 {
 	printf("mvod view: %lld poses, %lld status messages, last state %s",
 	       (long long)w->view.poses, (long long)w->view.statuses,
-	       mvod_track_state_name(w->view.state));
+	       mvod_run_state_name(w->view.state));
 	if (w->c->png)
 		printf("; %s written %d times", w->c->png, w->png_writes);
 	if (w->end_of_log && w->cut_at >= 0)

@@ -7,8 +7,36 @@
 #include <string.h>
 
 #include "ipc/lcm_log.h"
+#include "mvod/pipeline.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
+
+/*
+ * mvod's enums go on the wire as they are: a reader decodes them with the generated
+ * constants, so each value is pinned to its constant here (types change only additively).
+ */
+#define SAME(a, b) _Static_assert((int)(a) == (b), #a " is not " #b " on the wire")
+SAME(MVOD_RUN_STARTING, MVOD_POSE_T_STATE_STARTING);
+SAME(MVOD_STATE_INITIALIZING, MVOD_POSE_T_STATE_INITIALIZING);
+SAME(MVOD_STATE_TRACKING, MVOD_POSE_T_STATE_TRACKING);
+SAME(MVOD_STATE_LOST, MVOD_POSE_T_STATE_LOST);
+SAME(MVOD_RUN_SOURCE_DOWN, MVOD_POSE_T_STATE_SOURCE_DOWN);
+SAME(MVOD_RUN_STOPPING, MVOD_POSE_T_STATE_STOPPING);
+SAME(MVOD_SCALE_NONE, MVOD_POSE_T_SCALE_NONE);
+SAME(MVOD_SCALE_STRUCTURE, MVOD_POSE_T_SCALE_STRUCTURE);
+SAME(MVOD_SCALE_CONSTANT_SPEED, MVOD_POSE_T_SCALE_CONSTANT_SPEED);
+SAME(MVOD_SCALE_GROUND_TRUTH, MVOD_POSE_T_SCALE_GROUND_TRUTH);
+SAME(MVOD_SCALE_UNIT, MVOD_POSE_T_SCALE_UNIT);
+SAME(MVOD_FRAME_MOTION, MVOD_POSE_T_FRAME_MOTION);
+SAME(MVOD_FRAME_FIRST, MVOD_POSE_T_FRAME_FIRST);
+SAME(MVOD_FRAME_ROTATION, MVOD_POSE_T_FRAME_ROTATION);
+SAME(MVOD_FRAME_FEW_FEATURES, MVOD_POSE_T_FRAME_FEW_FEATURES);
+SAME(MVOD_FRAME_FEW_MATCHES, MVOD_POSE_T_FRAME_FEW_MATCHES);
+SAME(MVOD_FRAME_RANSAC_FAILED, MVOD_POSE_T_FRAME_RANSAC_FAILED);
+SAME(MVOD_FRAME_FEW_INLIERS, MVOD_POSE_T_FRAME_FEW_INLIERS);
+/* The status message has one field per stage, in this order. */
+SAME(MVOD_STAGE_COUNT, 5);
+#undef SAME
 
 /*
  * One allocation holds the struct, both encoding buffers and both channel names, so the
@@ -220,10 +248,9 @@ int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 	return publish(ipc, ipc->pose_channel, ipc->pose_buf, len);
 }
 
-int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
+void mvod_status_to_msg(const struct mvod_status *st, mvod_status_t *msg)
 {
-	assert(ipc && st);
-	const mvod_status_t msg = {
+	*msg = (mvod_status_t){
 		.utime = st->utime,
 		.state = (int8_t)st->state,
 		.fps = (float)st->fps,
@@ -241,7 +268,32 @@ int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
 		.uptime_s = st->uptime_s,
 		.faults = st->faults,
 	};
+}
 
+void mvod_status_from_msg(const mvod_status_t *msg, struct mvod_status *st)
+{
+	*st = (struct mvod_status){
+		.utime = msg->utime,
+		.fps = msg->fps,
+		.stage_ms = {msg->capture_ms, msg->preprocess_ms, msg->detect_ms, msg->match_ms,
+			     msg->pose_ms},
+		.features = msg->features,
+		.matches = msg->matches,
+		.inliers = msg->inliers,
+		.frames = msg->frames,
+		.dropped = msg->dropped_frames,
+		.rss_kb = msg->rss_kb,
+		.uptime_s = msg->uptime_s,
+		.state = (enum mvod_run_state)msg->state,
+		.faults = msg->faults,
+	};
+}
+
+int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
+{
+	assert(ipc && st);
+	mvod_status_t msg;
+	mvod_status_to_msg(st, &msg);
 	int len = mvod_status_t_encode(ipc->status_buf, 0, ipc->status_len, &msg);
 	return publish(ipc, ipc->status_channel, ipc->status_buf, len);
 }

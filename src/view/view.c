@@ -16,7 +16,7 @@
 
 int mvod_view_init(struct mvod_view *v, int max_poses)
 {
-	*v = (struct mvod_view){.state = MVOD_STATE_STARTING, .pose_hz = NAN};
+	*v = (struct mvod_view){.state = MVOD_RUN_STARTING, .pose_hz = NAN};
 	mvod_pose_identity(&v->pose);
 	return mvod_path_init(&v->path, max_poses);
 }
@@ -47,7 +47,7 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 	memcpy(v->pose.t, msg->position, sizeof(v->pose.t));
 	mvod_quat_to_rot(msg->orientation, v->pose.R);
 	v->frame = msg->frame;
-	v->state = (enum mvod_track_state)msg->state;
+	v->state = (enum mvod_run_state)msg->state;
 	v->scale_source = msg->scale_source;
 	/* A held frame (SCALE_NONE) has no step, and says nothing about the run's scale. */
 	if (msg->scale_source != MVOD_POSE_T_SCALE_NONE)
@@ -64,21 +64,8 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 void mvod_view_add_status(struct mvod_view *v, const mvod_status_t *msg)
 {
 	v->statuses++;
-	v->state = (enum mvod_track_state)msg->state;
-	v->status = (struct mvod_status){
-		.utime = msg->utime,
-		.fps = msg->fps,
-		.stage_ms = {msg->capture_ms, msg->preprocess_ms, msg->detect_ms, msg->match_ms,
-			     msg->pose_ms},
-		.features = msg->features,
-		.matches = msg->matches,
-		.inliers = msg->inliers,
-		.frames = msg->frames,
-		.dropped = msg->dropped_frames,
-		.rss_kb = msg->rss_kb,
-		.uptime_s = msg->uptime_s,
-		.state = (enum mvod_track_state)msg->state,
-	};
+	v->state = (enum mvod_run_state)msg->state;
+	mvod_status_from_msg(msg, &v->status);
 }
 
 double mvod_view_yaw_deg(const struct mvod_view *v)
@@ -132,6 +119,26 @@ static void pose_rows(const struct mvod_view *v, int64_t now_us, struct mvod_vie
 		row(rows, max, n, "poses received", "%.1f /s", v->pose_hz);
 }
 
+/* The fault bits mvod has reported, by name ("" when none). */
+static void fault_names(int32_t faults, char *buf, size_t len)
+{
+	static const struct {
+		int32_t bit;
+		const char *name;
+	} names[] = {
+		{MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE, "trajectory"},
+		{MVOD_STATUS_T_FAULT_FRAME_UNREADABLE, "bad frames"},
+		{MVOD_STATUS_T_FAULT_SOURCE_BROKEN, "source broken"},
+		{MVOD_STATUS_T_FAULT_PUBLISH, "publish"},
+	};
+	size_t used = 0;
+	buf[0] = '\0';
+	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]) && used < len; i++)
+		if (faults & names[i].bit)
+			used += (size_t)snprintf(buf + used, len - used, "%s%s", used ? ", " : "",
+						 names[i].name);
+}
+
 static void status_rows(const struct mvod_view *v, struct mvod_view_row *rows, int max, int *n)
 {
 	const struct mvod_status *s = &v->status;
@@ -146,6 +153,10 @@ static void status_rows(const struct mvod_view *v, struct mvod_view_row *rows, i
 	    s->stage_ms[MVOD_STAGE_POSE]);
 	row(rows, max, n, "RSS", "%.1f MiB", (double)s->rss_kb / 1024.0);
 	row(rows, max, n, "uptime", "%lld:%02lld:%02lld", up / 3600, up / 60 % 60, up % 60);
+	char faults[96];
+	fault_names(s->faults, faults, sizeof(faults));
+	if (*faults)
+		row(rows, max, n, "faults", "%s", faults);
 }
 
 int mvod_view_rows(const struct mvod_view *v, int64_t now_us, struct mvod_view_row *rows,

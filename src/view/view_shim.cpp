@@ -27,13 +27,13 @@ const cv::Scalar WHITE(255, 255, 255), BLACK(0, 0, 0), GREY(110, 110, 110),
 /* The plot's heading arrow colour, so the compass reads as the same arrow. */
 const cv::Scalar HEADING_COLOR(30, 30, 210);
 
-cv::Scalar state_color(enum mvod_track_state s)
+cv::Scalar state_color(enum mvod_run_state s)
 {
 	switch (s) {
-	case MVOD_STATE_TRACKING: return {40, 150, 40};
-	case MVOD_STATE_LOST:
-	case MVOD_STATE_SOURCE_DOWN: return {30, 30, 210};
-	case MVOD_STATE_STOPPING: return GREY;
+	case MVOD_RUN_TRACKING: return {40, 150, 40};
+	case MVOD_RUN_LOST:
+	case MVOD_RUN_SOURCE_DOWN: return {30, 30, 210};
+	case MVOD_RUN_STOPPING: return GREY;
 	default: return {0, 140, 220}; /* STARTING, INITIALIZING: amber */
 	}
 }
@@ -97,7 +97,7 @@ int draw_state(cv::Mat &panel, const struct mvod_view *v, const char *banner)
 	int y = MARGIN + 16;
 	text(panel, "tracking state", {MARGIN, y}, 0.5, GREY);
 	y += 36;
-	text(panel, mvod_track_state_name(v->state), {MARGIN, y}, 0.95, state_color(v->state), 2);
+	text(panel, mvod_run_state_name(v->state), {MARGIN, y}, 0.95, state_color(v->state), 2);
 	if (banner) {
 		y += 28;
 		text(panel, banner, {MARGIN, y}, 0.55, BLACK);

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -60,7 +61,7 @@ extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resi
 	    (blur_ksize && (blur_ksize < 0 || blur_ksize % 2 == 0)))
 		return -EINVAL;
 	return mvod_guarded([&] {
-		auto *p = new mvod_cv_preproc();
+		auto p = std::make_unique<mvod_cv_preproc>();
 		p->in_w = cam->width;
 		p->in_h = cam->height;
 		p->out_w = (int)(cam->width * resize + 0.5);
@@ -78,12 +79,12 @@ extern "C" int mvod_cv_preproc_create(const struct mvod_camera *cam, double resi
 		c.model = MVOD_CAM_PINHOLE_RADTAN;
 		p->remap = mvod_camera_has_distortion(cam);
 		if (p->remap)
-			build_maps(p, cam, K_of(&c));
+			build_maps(p.get(), cam, K_of(&c));
 		p->grey.create(p->in_h, p->in_w, CV_8UC1);
 		p->scaled.create(p->out_h, p->out_w, CV_8UC1);
 		p->blurred.create(p->out_h, p->out_w, CV_8UC1);
 		*out_cam = c;
-		*out = p;
+		*out = p.release();
 		return 0;
 	});
 }
@@ -142,7 +143,7 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 	if (max_features < 8 || width < MVOD_VO_MIN_PX || height < MVOD_VO_MIN_PX)
 		return -EINVAL;
 	return mvod_guarded([&] {
-		auto *d = new mvod_cv_detector();
+		auto d = std::make_unique<mvod_cv_detector>();
 		if (kind == MVOD_DETECTOR_SIFT)
 			d->f2d = cv::SIFT::create(max_features);
 		else
@@ -156,7 +157,7 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 		 * last one, 2001 of 2000 on 3 of 20 KITTI frames, and those frames still do.
 		 */
 		d->desc.create(max_features, d->f2d->descriptorSize(), d->f2d->descriptorType());
-		*out = d;
+		*out = d.release();
 		return 0;
 	});
 }
@@ -172,6 +173,8 @@ extern "C" int mvod_cv_detect(struct mvod_cv_detector *d, const struct mvod_imag
 		for (int i = 0; i < n; i++) {
 			out->kp[i].x = d->kps[(size_t)i].pt.x;
 			out->kp[i].y = d->kps[(size_t)i].pt.y;
+			out->kp[i].octave = d->kps[(size_t)i].octave;
+			out->kp[i].response = d->kps[(size_t)i].response;
 			memcpy(out->desc + (size_t)i * d->desc_bytes, d->desc.ptr(i),
 			       (size_t)d->desc_bytes);
 		}
@@ -210,10 +213,10 @@ static cv::Ptr<cv::DescriptorMatcher> make_matcher(bool binary, bool flann)
 extern "C" int mvod_cv_nn_create(enum mvod_detector kind, bool flann, struct mvod_cv_nn **out)
 {
 	return mvod_guarded([&] {
-		auto *nn = new mvod_cv_nn();
+		auto nn = std::make_unique<mvod_cv_nn>();
 		nn->binary = kind == MVOD_DETECTOR_ORB;
 		nn->m = make_matcher(nn->binary, flann);
-		*out = nn;
+		*out = nn.release();
 		return 0;
 	});
 }
@@ -292,22 +295,6 @@ extern "C" int mvod_cv_decompose_essential(const double E[9], double R1[9], doub
 		}
 		for (int i = 0; i < 3; i++)
 			t[i] = tv[i];
-		return 0;
-	});
-}
-
-extern "C" int mvod_cv_svd3(const double A[9], double U[9], double S[3], double Vt[9])
-{
-	return mvod_guarded([&] {
-		cv::Matx33d a(A), u, vt;
-		cv::Vec3d s;
-		cv::SVD::compute(a, s, u, vt, cv::SVD::FULL_UV);
-		for (int i = 0; i < 9; i++) {
-			U[i] = u.val[i];
-			Vt[i] = vt.val[i];
-		}
-		for (int i = 0; i < 3; i++)
-			S[i] = s[i];
 		return 0;
 	});
 }

@@ -11,30 +11,11 @@
 #include "mvod/calib.h"
 #include "mvod/image.h"
 #include "mvod/vo.h"
+#include "types.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-#define MVOD_ORB_DESC_BYTES 32
-#define MVOD_SIFT_DESC_BYTES (128 * 4) /* 128 floats */
-
-struct mvod_keypoint {
-	float x, y; /* pixels in the preprocessed image */
-};
-
-/* Caller-owned: kp[cap], desc[cap * desc_bytes]. */
-struct mvod_features {
-	int n, cap;
-	int desc_bytes; /* MVOD_ORB_DESC_BYTES (binary) or MVOD_SIFT_DESC_BYTES (float) */
-	struct mvod_keypoint *kp;
-	uint8_t *desc;
-};
-
-struct mvod_match {
-	int a, b;   /* index into the first and second feature set */
-	float dist; /* descriptor distance: Hamming bits (ORB) or L2 (SIFT) */
-};
 
 /* Undistort (maps computed once), resize, blur, grey: the whole preprocess stage. */
 struct mvod_cv_preproc;
@@ -86,8 +67,6 @@ int mvod_cv_find_essential(const double *x1, const double *x2, int n, bool magsa
 			   double conf, double E[9], uint8_t *mask, int *n_inliers);
 /* The four candidates are (R1, t), (R1, -t), (R2, t), (R2, -t); |t| = 1. */
 int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3]);
-/* A = U diag(S) Vt, S descending. */
-int mvod_cv_svd3(const double A[9], double U[9], double S[3], double Vt[9]);
 
 #ifdef __cplusplus
 }

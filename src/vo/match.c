@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cv_shim.h"
+
 struct mvod_matcher {
 	struct mvod_match_params p;
 	int cap;

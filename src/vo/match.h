@@ -10,8 +10,8 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "cv_shim.h"
 #include "mvod/vo.h"
+#include "types.h"
 
 struct mvod_match_params {
 	enum mvod_matcher_kind kind;

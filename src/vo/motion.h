@@ -50,21 +50,12 @@ int mvod_motion_cheirality(const double R1[9], const double R2[9], const double 
 int mvod_motion_relative_scale(const double *prev, const double *cur, int n, int min_pairs,
 			       double *scratch, double *s);
 
-/* Median of v[0..n) (reorders v); n > 0. */
-double mvod_median(double *v, int n);
-
 /*
  * Best rotation with x2 ~ R x1 for the points with mask set (Kabsch on unit bearings), for
  * frames with no measurable translation. Returns -EINVAL for fewer than 2 points.
  */
 int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t *mask, int n,
 			      double R[9]);
-
-/*
- * The rotation R maximising trace(R^T C) for a correlation C = sum dst src^T (Kabsch and
- * Umeyama share it), with trace = trace(D S) of the SVD for Umeyama's scale (may be NULL).
- */
-int mvod_nearest_rotation(const double C[9], double R[9], double *trace);
 
 /* Distance in the normalised image plane between R x1 (projected) and x2; INFINITY behind. */
 double mvod_motion_rotation_residual(const double R[9], const double x1[2], const double x2[2]);

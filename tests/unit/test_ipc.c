@@ -15,6 +15,7 @@
 #include "harness.h"
 #include "ipc/lcm_log.h"
 #include "mvod/ipc.h"
+#include "mvod/pipeline.h"
 #include "mvod_pose_t.h"
 #include "mvod_status_t.h"
 
@@ -169,7 +170,7 @@ static void test_status_roundtrip(void **state)
 		.features = 1800, .matches = 900, .inliers = 450,
 		.frames = 123456789012LL, .dropped = 42, .rss_kb = 65536,
 		.uptime_s = 3600.125,
-		.state = MVOD_STATE_LOST,
+		.state = MVOD_RUN_LOST,
 		.faults = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE | MVOD_STATUS_T_FAULT_PUBLISH,
 	};
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
@@ -233,7 +234,7 @@ static void test_custom_channels(void **state)
 
 	struct mvod_vo_result res;
 	double q[4];
-	const struct mvod_status st = {.state = MVOD_STATE_TRACKING};
+	const struct mvod_status st = {.state = MVOD_RUN_TRACKING};
 	make_result(0, &res, q);
 	assert_int_equal(mvod_ipc_publish_pose(ipc, utime_of(0), 0, &res), 0);
 	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);

@@ -14,6 +14,7 @@
 #include "mvod/geom.h"
 #include "vo/cv_shim.h"
 #include "vo/motion.h"
+#include "util/linalg.h"
 
 #define N 200
 

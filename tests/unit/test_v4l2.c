@@ -820,10 +820,10 @@ static void test_unplug_and_return(void **state)
 	assert_int_equal(F.opens, 2); /* the first and the one after the refusal */
 	assert_true(sum.live);
 	assert_int_equal(sum.frames + sum.dropped, 12);
-	int down = index_of(&got, MVOD_STATE_SOURCE_DOWN, 0);
+	int down = index_of(&got, MVOD_RUN_SOURCE_DOWN, 0);
 	assert_true(down >= 0);
 	assert_true(index_of(&got, MVOD_STATE_INITIALIZING, down) > down);
-	assert_int_equal(got.last.state, MVOD_STATE_STOPPING);
+	assert_int_equal(got.last.state, MVOD_RUN_STOPPING);
 	assert_int_equal(got.last.frames, sum.frames);
 	assert_int_equal(got.last.dropped_frames, sum.dropped);
 }
@@ -845,8 +845,8 @@ static void test_stop_while_down(void **state)
 	run_fake(&stop, &got, &sum);
 	assert_int_equal(F.refused, 2);
 	assert_int_equal(F.opens, 1);
-	assert_true(index_of(&got, MVOD_STATE_SOURCE_DOWN, 0) >= 0);
-	assert_int_equal(got.last.state, MVOD_STATE_STOPPING);
+	assert_true(index_of(&got, MVOD_RUN_SOURCE_DOWN, 0) >= 0);
+	assert_int_equal(got.last.state, MVOD_RUN_STOPPING);
 	assert_int_equal(sum.frames + sum.dropped, 3);
 }
 
@@ -862,13 +862,13 @@ struct poses {
 	double R[BEFORE + AFTER][9];
 };
 
-static int on_pose(void *ctx, const struct mvod_frame_report *f)
+static int on_pose(void *ctx, const struct mvod_frame_out *f)
 {
 	struct poses *p = ctx;
 	int i = atomic_load(&p->n);
 	assert_true(i < BEFORE + AFTER);
-	memcpy(p->t[i], f->est->t, sizeof(p->t[i]));
-	memcpy(p->R[i], f->est->R, sizeof(p->R[i]));
+	memcpy(p->t[i], f->res->pose.t, sizeof(p->t[i]));
+	memcpy(p->R[i], f->res->pose.R, sizeof(p->R[i]));
 	atomic_store(&p->n, i + 1);
 	return 0;
 }
@@ -931,14 +931,16 @@ static void test_reconnect_continues_pose(void **state)
 	mvod_run_opts_default(&o);
 	o.source = "v4l2:" DEV "?width=320&height=240&format=GREY";
 	o.calib = calib;
-	o.on_frame = on_pose;
-	o.on_frame_ctx = &got_poses;
+	static const struct mvod_sink_ops pose_ops = {.name = "poses", .frame = on_pose};
+	struct mvod_sink sink = {&pose_ops, &got_poses};
+	o.sinks = &sink;
+	o.n_sinks = 1;
 	struct statuses got = {0};
 	struct mvod_run_summary sum;
 	run_opts(&o, &stop, &got, &sum);
 	free(scenes);
 	assert_int_equal(sum.frames, BEFORE + AFTER); /* the lockstep lost none */
-	assert_true(index_of(&got, MVOD_STATE_SOURCE_DOWN, 0) >= 0);
+	assert_true(index_of(&got, MVOD_RUN_SOURCE_DOWN, 0) >= 0);
 
 	double (*t)[3] = got_poses.t, (*R)[9] = got_poses.R;
 	int last = BEFORE - 1, first = BEFORE, end = BEFORE + AFTER - 1;

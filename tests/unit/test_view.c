@@ -106,7 +106,7 @@ static void test_newest_state_and_rows(void **state)
 	mvod_status_t st = {.state = MVOD_POSE_T_STATE_SOURCE_DOWN, .fps = 29.75f,
 			    .dropped_frames = 7, .rss_kb = 51200, .uptime_s = 3725.4};
 	mvod_view_add_status(&v, &st);
-	assert_int_equal(v.state, MVOD_STATE_SOURCE_DOWN);
+	assert_int_equal(v.state, MVOD_RUN_SOURCE_DOWN);
 	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
 	assert_string_equal(value_of(rows, n, "mvod fps"), "29.8");
 	assert_string_equal(value_of(rows, n, "dropped frames"), "7");
@@ -115,6 +115,30 @@ static void test_newest_state_and_rows(void **state)
 	assert_string_equal(value_of(rows, n, "messages"), "1 poses, 1 status");
 	/* A short array gets the first rows, not an overflow. */
 	assert_int_equal(mvod_view_rows(&v, 0, rows, 2), 2);
+	mvod_view_fini(&v);
+}
+
+/* The faults mvod reports show by name, and only when there are some. */
+static void test_faults_row(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	struct mvod_view_row rows[MVOD_VIEW_MAX_ROWS];
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	mvod_status_t st = {.state = MVOD_POSE_T_STATE_TRACKING};
+	mvod_view_add_status(&v, &st);
+	int n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	for (int i = 0; i < n; i++)
+		assert_string_not_equal(rows[i].label, "faults");
+	st.faults = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE | MVOD_STATUS_T_FAULT_PUBLISH;
+	mvod_view_add_status(&v, &st);
+	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "faults"), "trajectory, publish");
+	st.faults = 15; /* all four: the longest value still fits a row */
+	mvod_view_add_status(&v, &st);
+	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "faults"),
+			    "trajectory, bad frames, source broken, publish");
 	mvod_view_fini(&v);
 }
 
@@ -220,6 +244,7 @@ int main(void)
 		cmocka_unit_test(test_rate_and_staleness),
 		cmocka_unit_test(test_memory_fixed),
 		cmocka_unit_test(test_newest_state_and_rows),
+		cmocka_unit_test(test_faults_row),
 		cmocka_unit_test(test_plot_draw_checks_image),
 		cmocka_unit_test(test_plot_draw_paints_every_pixel),
 		cmocka_unit_test(test_unit_follows_scale_source),

@@ -4,7 +4,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "motion.h"
+#include "util/linalg.h"
 
 #define RAD2DEG (180.0 / M_PI)
 

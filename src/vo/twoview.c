@@ -1,0 +1,181 @@
+/*
+ * The two-view algorithm: the motion between the reference frame and the current one from
+ * their matches (a rotation-only model first, then the essential matrix, its decomposition by
+ * cheirality, and the step length), applied to the pose chain. A map mode will sit beside it.
+ */
+#include "vo_internal.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "cv_shim.h"
+#include "motion.h"
+#include "util/linalg.h"
+
+/*
+ * The best essential-matrix decomposition must have at least this many times the points in
+ * front of both cameras that the runner-up has: with fewer, the structure is too close to
+ * infinity for the direction of translation to be known.
+ */
+#define CHEIRALITY_MARGIN 2
+
+static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k, double *x)
+{
+	x[0] = (k->x - c->cx) / c->fx;
+	x[1] = (k->y - c->cy) / c->fy;
+}
+
+/*
+ * Median over all matches of the flow rotation alone does not explain, in pixels: the parallax
+ * that translation made. A median, so that up to half the matches may be wrong.
+ */
+static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
+{
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	for (int i = 0; i < n; i++)
+		vo->scratch[i] = mvod_motion_rotation_residual(R, vo->x1 + 2 * i, vo->x2 + 2 * i) * f;
+	return n ? mvod_median(vo->scratch, n) : 0.0;
+}
+
+/* Correspondence i is an inlier in front of both cameras, near enough to carry scale. */
+static bool well_triangulated(const struct mvod_vo *vo, int i)
+{
+	return vo->mask[i] && vo->depth[i] > 0 && vo->depth[i] <= MVOD_MOTION_SCALE_DEPTH;
+}
+
+/*
+ * Step length from the structure both steps share: points the reference saw from its own
+ * previous step (absolute units) against the same points from this step (unit baseline).
+ */
+static int structure_scale(struct mvod_vo *vo, int n, double *s)
+{
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		int a = vo->matches[i].a;
+		if (!well_triangulated(vo, i) || !vo->ref->has_pt[a])
+			continue;
+		memcpy(vo->prev_pts + 3 * m, vo->ref->pts + 3 * a, 3 * sizeof(double));
+		double *c = vo->cur_pts + 3 * m;
+		c[0] = vo->x1[2 * i] * vo->depth[i];
+		c[1] = vo->x1[2 * i + 1] * vo->depth[i];
+		c[2] = vo->depth[i];
+		m++;
+	}
+	return mvod_motion_relative_scale(vo->prev_pts, vo->cur_pts, m, 10, vo->scratch, s);
+}
+
+static double step_length(struct mvod_vo *vo, int n, const double *gt,
+			  enum mvod_scale_source *src)
+{
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT) {
+		*src = MVOD_SCALE_GROUND_TRUTH;
+		return mvod_vec3_dist(gt, vo->ref->gt);
+	}
+	double s;
+	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {
+		*src = MVOD_SCALE_STRUCTURE;
+		return s;
+	}
+	*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
+	return vo->have_step ? vo->last_step : 1.0;
+}
+
+/* Structure of this step in the new reference's frame (X2 = R X1 + t s), for the next scale. */
+static void store_structure(struct mvod_vo *vo, const double R[9], const double t[3], double s,
+			    int n)
+{
+	memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+	for (int i = 0; i < n; i++) {
+		if (!well_triangulated(vo, i))
+			continue;
+		double X1[3] = {vo->x1[2 * i] * vo->depth[i] * s, vo->x1[2 * i + 1] * vo->depth[i] * s,
+				vo->depth[i] * s};
+		double *X2 = vo->cur->pts + 3 * vo->matches[i].b;
+		mvod_mat3_vec(R, X1, X2);
+		for (int k = 0; k < 3; k++)
+			X2[k] += t[k] * s;
+		vo->cur->has_pt[vo->matches[i].b] = 1;
+	}
+}
+
+/* pose = ref_pose * inverse([R | t s]) for the motion X_cur = R X_ref + t s. */
+static void apply_motion(struct mvod_vo *vo, const double R[9], const double t[3], double s)
+{
+	struct mvod_pose rel = {0}, inv;
+	memcpy(rel.R, R, sizeof(rel.R));
+	for (int k = 0; k < 3; k++)
+		rel.t[k] = t[k] * s;
+	mvod_pose_inverse(&rel, &inv);
+	mvod_pose_compose(&vo->ref->pose, &inv, &vo->pose);
+}
+
+/* The rotation-only model of this frame's matches: how many inliers it has, and R. */
+struct rotation {
+	double R[9];
+	int inliers;
+};
+
+static void fit_rotation(struct mvod_vo *vo, int n, struct rotation *rot)
+{
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	double thresh = (vo->p.min_parallax_px + vo->p.ransac_px) / f;
+	rot->inliers = mvod_motion_rotation_ransac(vo->x1, vo->x2, n, thresh, 64, vo->mask, rot->R);
+}
+
+static enum mvod_frame_status apply_rotation(struct mvod_vo *vo, const struct rotation *rot,
+					     struct mvod_vo_result *res)
+{
+	double t0[3] = {0, 0, 0};
+	apply_motion(vo, rot->R, t0, 0.0);
+	res->inliers = rot->inliers;
+	res->scale_source = MVOD_SCALE_NONE;
+	return MVOD_FRAME_ROTATION;
+}
+
+/*
+ * A camera that only rotates (or stands still) gives a degenerate essential matrix: any t
+ * fits. So the rotation-only model is fitted first; if it explains the flow to within
+ * min_parallax_px, the frame is a rotation and translation is left alone. The same fit serves
+ * a frame whose translation turns out unknowable (a near tie below).
+ */
+enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *gt,
+					     struct mvod_vo_result *res)
+{
+	int n = res->matches;
+	for (int i = 0; i < n; i++) {
+		normalise(&vo->cam, &vo->ref->f.kp[vo->matches[i].a], vo->x1 + 2 * i);
+		normalise(&vo->cam, &vo->cur->f.kp[vo->matches[i].b], vo->x2 + 2 * i);
+	}
+	struct rotation rot;
+	fit_rotation(vo, n, &rot);
+	bool rot_ok = rot.inliers >= vo->p.min_inliers;
+	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < vo->p.min_parallax_px)
+		return apply_rotation(vo, &rot, res);
+	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
+	double E[9], R1[9], R2[9], tu[3], R[9], t[3];
+	int inl = 0;
+	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	bool magsac = vo->p.robust == MVOD_ROBUST_MAGSAC;
+	if (mvod_cv_find_essential(vo->x1, vo->x2, n, magsac, vo->p.ransac_px / f, vo->p.ransac_conf,
+				   E, vo->mask, &inl) != 0 ||
+	    inl < vo->p.min_inliers || mvod_cv_decompose_essential(E, R1, R2, tu) != 0)
+		return MVOD_FRAME_RANSAC_FAILED;
+	int runner_up;
+	res->inliers = mvod_motion_cheirality(R1, R2, tu, vo->x1, vo->x2, vo->mask, n, R, t, vo->depth,
+					      &runner_up);
+	if (res->inliers < vo->p.min_inliers)
+		return MVOD_FRAME_FEW_INLIERS;
+	/*
+	 * Two decompositions with nearly as many points in front: the structure is too close to
+	 * infinity for the direction to be known. Keep the rotation, wait for more parallax.
+	 */
+	if (res->inliers < CHEIRALITY_MARGIN * runner_up)
+		return rot_ok ? apply_rotation(vo, &rot, res) : MVOD_FRAME_FEW_INLIERS;
+	double s = step_length(vo, n, gt, &res->scale_source);
+	apply_motion(vo, R, t, s);
+	store_structure(vo, R, t, s, n);
+	res->step_m = s;
+	vo->last_step = s;
+	vo->have_step = 1;
+	return MVOD_FRAME_MOTION;
+}

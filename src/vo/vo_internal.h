@@ -1,0 +1,49 @@
+/* What vo.c (the state machine) and twoview.c (the two-view algorithm) share. */
+#ifndef MVOD_VO_INTERNAL_H
+#define MVOD_VO_INTERNAL_H
+
+#include "match.h"
+#include "mvod/vo.h"
+#include "types.h"
+
+/*
+ * A frame slot: one frame's features and, for the reference frame, the structure seen from it.
+ * Two slots hold the reference frame and the current one; promote() swaps them.
+ */
+struct frame_slot {
+	struct mvod_features f;
+	double *pts; /* cap * 3: point in this camera's frame, absolute units */
+	uint8_t *has_pt;
+	struct mvod_pose pose; /* camera-to-world */
+	double gt[3]; /* ground-truth position, with --scale gt */
+};
+
+struct mvod_vo {
+	struct mvod_vo_params p;
+	struct mvod_camera cam; /* after preprocessing: pinhole, no distortion */
+	struct mvod_cv_preproc *pre;
+	struct mvod_cv_detector *det;
+	struct mvod_matcher *matcher;
+	int cap;
+	struct frame_slot slot[2]; /* storage behind ref and cur */
+	struct frame_slot *ref, *cur;
+	int have_ref;
+	struct mvod_match *matches;
+	double *x1, *x2, *depth, *prev_pts, *cur_pts, *scratch;
+	uint8_t *mask;
+	struct mvod_pose pose; /* last published pose */
+	enum mvod_track_state state;
+	double last_step;   /* length of the last translation step, for constant speed */
+	int have_step;
+};
+
+/*
+ * Motion of the current slot against the reference from res->matches matches in
+ * vo->matches: updates vo->pose (and, on MOTION, the current slot's structure, the last step)
+ * and res's inliers, scale source and step. Returns the frame status (MOTION, ROTATION,
+ * RANSAC_FAILED, FEW_INLIERS). gt: this frame's ground-truth position (--scale gt) or NULL.
+ */
+enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *gt,
+					     struct mvod_vo_result *res);
+
+#endif

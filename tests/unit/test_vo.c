@@ -1,0 +1,391 @@
+/*
+ * The VO's state machine through its seam below the detector (src/vo/vo_seam.h): a test front
+ * end projects a fixed cloud of 3-D points through camera poses chosen by each test, and gives
+ * every point one fixed random ORB-sized descriptor, so matching is exact and each frame's
+ * outcome is known in advance. No image is rendered: the whole file runs in milliseconds.
+ */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "mvod/geom.h"
+#include "mvod/vo.h"
+#include "vo/vo_seam.h"
+
+#define POINTS 400
+#define W 640
+#define H 480
+#define F 500.0
+
+static const struct mvod_camera cam = {
+	.width = W, .height = H, .fx = F, .fy = F, .cx = W / 2.0, .cy = H / 2.0,
+};
+
+/* The world: points ahead of the first camera (world = first camera frame, z forward). */
+static double world[POINTS][3];
+static uint8_t desc[POINTS][MVOD_ORB_DESC_BYTES];
+
+static unsigned lcg(unsigned *s)
+{
+	*s = *s * 1103515245u + 12345u;
+	return *s >> 8;
+}
+
+static int setup_world(void **state)
+{
+	unsigned s = 4242;
+	for (int i = 0; i < POINTS; i++) {
+		world[i][0] = (lcg(&s) % 4000) / 100.0 - 20; /* -20 .. 20 m */
+		world[i][1] = (lcg(&s) % 800) / 100.0 - 5;   /* -5 .. 3 m */
+		world[i][2] = 10 + (lcg(&s) % 5000) / 100.0; /* 10 .. 60 m */
+		for (int k = 0; k < MVOD_ORB_DESC_BYTES; k++)
+			desc[i][k] = (uint8_t)lcg(&s);
+	}
+	return 0;
+}
+
+/* One frame of the test front end. */
+struct view {
+	struct mvod_keypoint kp[POINTS];
+	uint8_t d[POINTS * MVOD_ORB_DESC_BYTES];
+	int id[POINTS]; /* world point of each feature */
+	struct mvod_features f;
+};
+
+/*
+ * Projects points first .. first + count - 1 (those in front and inside the image) seen by a
+ * camera at pose (camera-to-world): X_cam = R^T (X_world - t).
+ */
+static void project_range(struct view *v, const struct mvod_pose *pose, int first, int count)
+{
+	v->f = (struct mvod_features){.n = 0, .cap = POINTS, .desc_bytes = MVOD_ORB_DESC_BYTES,
+				      .kp = v->kp, .desc = v->d};
+	for (int i = first; i < first + count; i++) {
+		double d[3], X[3];
+		for (int k = 0; k < 3; k++)
+			d[k] = world[i][k] - pose->t[k];
+		mvod_mat3_tvec(pose->R, d, X);
+		if (X[2] < 0.5)
+			continue;
+		float u = (float)(F * X[0] / X[2] + W / 2.0), y = (float)(F * X[1] / X[2] + H / 2.0);
+		if (u < 0 || u >= W || y < 0 || y >= H)
+			continue;
+		int n = v->f.n++;
+		v->kp[n] = (struct mvod_keypoint){.x = u, .y = y};
+		memcpy(v->d + n * MVOD_ORB_DESC_BYTES, desc[i], MVOD_ORB_DESC_BYTES);
+		v->id[n] = i;
+	}
+}
+
+static void project(struct view *v, const struct mvod_pose *pose)
+{
+	project_range(v, pose, 0, POINTS);
+}
+
+/* A camera at position (x, y, z) metres, turned by yaw degrees about its y axis. */
+static struct mvod_pose at(double x, double y, double z, double yaw_deg)
+{
+	struct mvod_pose p;
+	double w[3] = {0, yaw_deg * M_PI / 180, 0};
+	mvod_rot_exp(w, p.R);
+	p.t[0] = x;
+	p.t[1] = y;
+	p.t[2] = z;
+	return p;
+}
+
+static struct mvod_vo *make_vo(enum mvod_scale_mode scale)
+{
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	p.scale_mode = scale;
+	struct mvod_vo *vo = NULL;
+	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
+	return vo;
+}
+
+static struct mvod_vo_result feed_view(struct mvod_vo *vo, const struct view *v)
+{
+	struct mvod_vo_result res;
+	assert_int_equal(mvod_vo_process_features(vo, &v->f, NULL, &res), 0);
+	return res;
+}
+
+/* Feeds the view of points first .. first + count - 1 from a camera at pose. */
+static struct mvod_vo_result feed_range(struct mvod_vo *vo, const struct mvod_pose *pose,
+					int first, int count)
+{
+	static struct view v;
+	project_range(&v, pose, first, count);
+	return feed_view(vo, &v);
+}
+
+/* Feeds the view of the whole scene from a camera at pose. */
+static struct mvod_vo_result feed(struct mvod_vo *vo, const struct mvod_pose *pose)
+{
+	static struct view v;
+	project(&v, pose);
+	assert_true(v.f.n >= 100); /* the scene is in view: these tests are about the VO */
+	return feed_view(vo, &v);
+}
+
+static void assert_frame(const struct mvod_vo_result *res, enum mvod_frame_status status,
+			 enum mvod_track_state state)
+{
+	assert_int_equal(res->status, status);
+	assert_int_equal(res->state, state);
+}
+
+/* A motion step with no structure to scale by: as long as the step before (constant speed). */
+static void assert_constant_speed(const struct mvod_vo_result *res,
+				  const struct mvod_vo_result *before)
+{
+	assert_frame(res, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+	assert_int_equal(res->scale_source, MVOD_SCALE_CONSTANT_SPEED);
+	assert_true(res->step_m == before->step_m);
+}
+
+static void assert_pose_equal(const struct mvod_pose *a, const struct mvod_pose *b)
+{
+	assert_memory_equal(a, b, sizeof(*a));
+}
+
+static void test_first_frame(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_pose id = at(0, 0, 0, 0);
+	static struct view v;
+	project(&v, &id);
+	struct mvod_vo_result res = feed_view(vo, &v);
+	assert_frame(&res, MVOD_FRAME_FIRST, MVOD_STATE_INITIALIZING);
+	assert_int_equal(res.features, v.f.n);
+	assert_int_equal(res.matches, 0);
+	struct mvod_pose identity;
+	mvod_pose_identity(&identity);
+	assert_pose_equal(&res.pose, &identity);
+	mvod_vo_destroy(vo);
+}
+
+/* Fewer features than min_matches (30): nothing to start from, no reference is made. */
+static void test_few_features_make_no_reference(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_pose id = at(0, 0, 0, 0);
+	struct mvod_vo_result res = feed_range(vo, &id, 0, 20);
+	assert_frame(&res, MVOD_FRAME_FEW_FEATURES, MVOD_STATE_INITIALIZING);
+	res = feed(vo, &id);
+	assert_int_equal(res.status, MVOD_FRAME_FIRST);
+	mvod_vo_destroy(vo);
+}
+
+static double angle_between(const double a[3], const double b[3])
+{
+	return mvod_vec3_angle(a, b) * 180 / M_PI;
+}
+
+/*
+ * Free scale: the first motion defines the unit (step exactly 1, along the true direction);
+ * the second is scaled by the structure both steps share, so its length relative to the first
+ * is the true ratio (here 2).
+ */
+static void test_free_scale_unit_step(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_pose p0 = at(0, 0, 0, 0), p1 = at(0.1, 0, 1, 0), p2 = at(0.3, 0, 3, 0);
+	feed(vo, &p0);
+	struct mvod_vo_result res = feed(vo, &p1);
+	assert_frame(&res, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+	assert_int_equal(res.scale_source, MVOD_SCALE_UNIT);
+	assert_true(res.step_m == 1.0);
+	/* The pose chain's only arithmetic on a unit step: |t| is 1 to rounding. */
+	assert_true(fabs(mvod_vec3_norm(res.pose.t) - 1) < 1e-12);
+	/*
+	 * Noise-free projections rounded to float pixels (1e-5 px at 640 px): the direction
+	 * comes out within 0.01 deg (measured 3e-5 deg).
+	 */
+	assert_true(angle_between(res.pose.t, p1.t) < 0.01);
+	assert_true(res.inliers > 100);
+	res = feed(vo, &p2);
+	assert_int_equal(res.status, MVOD_FRAME_MOTION);
+	assert_int_equal(res.scale_source, MVOD_SCALE_STRUCTURE);
+	/* Same rounding: the relative scale is the true 2 within 0.1 % (measured 1.3e-4 %). */
+	assert_true(fabs(res.step_m - 2.0) < 2e-3);
+	double t_true[3] = {3 / mvod_vec3_norm(p1.t) * 0.1, 0, 3 / mvod_vec3_norm(p1.t)};
+	assert_true(mvod_vec3_dist(res.pose.t, t_true) < 1e-3); /* measured 3e-6 */
+	mvod_vo_destroy(vo);
+}
+
+/* With --scale gt, the step is the ground truth's: the positions come out in metres. */
+static void test_gt_scale_step(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_GT);
+	struct mvod_pose p0 = at(0, 0, 0, 0), p1 = at(0, 0, 1.5, 0);
+	static struct view v;
+	struct mvod_vo_result res;
+	project(&v, &p0);
+	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), -EINVAL);
+	assert_int_equal(mvod_vo_process_features(vo, &v.f, p0.t, &res), 0);
+	project(&v, &p1);
+	assert_int_equal(mvod_vo_process_features(vo, &v.f, p1.t, &res), 0);
+	assert_int_equal(res.status, MVOD_FRAME_MOTION);
+	assert_int_equal(res.scale_source, MVOD_SCALE_GROUND_TRUTH);
+	assert_true(res.step_m == 1.5);
+	/* Same float rounding as above: within 1 mm of 1.5 m (measured 2e-7 m). */
+	assert_true(mvod_vec3_dist(res.pose.t, p1.t) < 1e-3);
+	mvod_vo_destroy(vo);
+}
+
+/*
+ * A turn on the spot is a rotation frame: the pose turns, the state stays, and the reference
+ * stays while the frame shares at least 2 * min_matches (60) matches with it, so that parallax
+ * can build up. Which frame is the reference shows in the next frame's match count.
+ */
+static void test_rotation_keeps_reference(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_pose p0 = at(0, 0, 0, 0), yaw = at(0, 0, 0, 1);
+	static struct view all, some;
+	project(&all, &p0);
+	struct mvod_vo_result res = feed_view(vo, &all);
+	/* Of the first 130 points, those in view: >= 60 shared with the reference, so it is kept. */
+	project_range(&some, &yaw, 0, 130);
+	assert_true(some.f.n >= 60 && some.f.n < all.f.n);
+	res = feed_view(vo, &some);
+	assert_frame(&res, MVOD_FRAME_ROTATION, MVOD_STATE_INITIALIZING);
+	assert_int_equal(res.scale_source, MVOD_SCALE_NONE);
+	assert_true(fabs(mvod_rot_angle(res.pose.R) * 180 / M_PI - 1) < 1e-3);
+	assert_true(mvod_vec3_norm(res.pose.t) == 0);
+	/* All points again, back at the start: matched against frame 0, so all of them match. */
+	res = feed_view(vo, &all);
+	assert_int_equal(res.status, MVOD_FRAME_ROTATION);
+	assert_int_equal(res.matches, all.f.n);
+	/* Fewer than 60 shared matches: this rotation frame becomes the reference. */
+	project_range(&some, &yaw, 0, 60);
+	assert_true(some.f.n >= 30 && some.f.n < 60);
+	res = feed_view(vo, &some);
+	assert_int_equal(res.status, MVOD_FRAME_ROTATION);
+	res = feed_view(vo, &all);
+	assert_int_equal(res.matches, some.f.n);
+	mvod_vo_destroy(vo);
+}
+
+/* Two frames of motion: the VO is TRACKING with a structure-scaled last step. */
+static struct mvod_vo_result start_tracking(struct mvod_vo *vo)
+{
+	struct mvod_pose p0 = at(0, 0, 0, 0), p1 = at(0, 0, 1, 0), p2 = at(0, 0, 2, 0);
+	feed(vo, &p0);
+	feed(vo, &p1);
+	struct mvod_vo_result res = feed(vo, &p2);
+	assert_int_equal(res.state, MVOD_STATE_TRACKING);
+	assert_int_equal(res.scale_source, MVOD_SCALE_STRUCTURE);
+	return res;
+}
+
+/*
+ * Features whose positions do not fit any motion (each descriptor moved to another feature's
+ * position): the estimator finds no model with min_inliers (20) inliers, the state becomes
+ * LOST, the pose is held, and the frame becomes the reference to start again from: so the next
+ * consistent frame fails against it too, and the one after tracks again, at the last step's
+ * length (a reference made after a failure has no structure to scale by).
+ */
+static void test_too_few_inliers_is_lost(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_vo_result before = start_tracking(vo);
+	struct mvod_pose p3 = at(0, 0, 3, 0), p4 = at(0, 0, 4, 0), p5 = at(0, 0, 5, 0);
+	static struct view v;
+	project(&v, &p3);
+	for (int i = 0; i < v.f.n; i++) { /* rotate the positions by a third of the list */
+		int j = (i + v.f.n / 3) % v.f.n;
+		struct mvod_keypoint k = v.kp[i];
+		v.kp[i] = v.kp[j];
+		v.kp[j] = k;
+	}
+	struct mvod_vo_result res = feed_view(vo, &v);
+	assert_int_equal(res.matches, v.f.n);
+	assert_frame(&res, MVOD_FRAME_RANSAC_FAILED, MVOD_STATE_LOST);
+	assert_pose_equal(&res.pose, &before.pose);
+	res = feed(vo, &p4);
+	assert_frame(&res, MVOD_FRAME_RANSAC_FAILED, MVOD_STATE_LOST);
+	res = feed(vo, &p5);
+	assert_constant_speed(&res, &before);
+	mvod_vo_destroy(vo);
+}
+
+/* Too few features while tracking: LOST, pose held, and the reference is kept. */
+static void test_few_features_keep_reference(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_vo_result before = start_tracking(vo);
+	struct mvod_pose p3 = at(0, 0, 3, 0);
+	struct mvod_vo_result res = feed_range(vo, &p3, 0, 20);
+	assert_frame(&res, MVOD_FRAME_FEW_FEATURES, MVOD_STATE_LOST);
+	assert_pose_equal(&res.pose, &before.pose);
+	/* Against the kept reference (frame 2, with structure): scaled by structure again. */
+	res = feed(vo, &p3);
+	assert_int_equal(res.status, MVOD_FRAME_MOTION);
+	assert_int_equal(res.scale_source, MVOD_SCALE_STRUCTURE);
+	mvod_vo_destroy(vo);
+}
+
+/*
+ * A restart (the source came back) forgets the reference but keeps the pose: the next frame
+ * is a first frame at the last pose, and the next step is scaled by the last one's length.
+ */
+static void test_restart_keeps_pose(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_vo_result before = start_tracking(vo);
+	mvod_vo_restart(vo);
+	struct mvod_pose p5 = at(0, 0, 5, 0), p6 = at(0, 0, 6, 0);
+	struct mvod_vo_result res = feed(vo, &p5);
+	assert_frame(&res, MVOD_FRAME_FIRST, MVOD_STATE_INITIALIZING);
+	assert_pose_equal(&res.pose, &before.pose);
+	res = feed(vo, &p6);
+	assert_constant_speed(&res, &before);
+	/*
+	 * Straight ahead by one last step from the held pose: a direction error e (rad) shortens
+	 * the forward part by e^2 / 2, so 1e-6 allows e up to 1e-3 (measured 1e-15).
+	 */
+	assert_true(fabs(res.pose.t[2] - before.pose.t[2] - before.step_m) < 1e-6);
+	mvod_vo_destroy(vo);
+}
+
+/* Features beyond the VO's capacity or of another descriptor size are refused. */
+static void test_seam_refuses_bad_features(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	static struct view v;
+	struct mvod_pose id = at(0, 0, 0, 0);
+	project(&v, &id);
+	struct mvod_vo_result res;
+	v.f.desc_bytes = MVOD_SIFT_DESC_BYTES;
+	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), -EINVAL);
+	v.f.desc_bytes = MVOD_ORB_DESC_BYTES;
+	v.f.n = 2000 + 2000 / 4 + 17; /* default max_features 2000: one over the capacity */
+	assert_int_equal(mvod_vo_process_features(vo, &v.f, NULL, &res), -EINVAL);
+	mvod_vo_destroy(vo);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_first_frame),
+		cmocka_unit_test(test_few_features_make_no_reference),
+		cmocka_unit_test(test_free_scale_unit_step),
+		cmocka_unit_test(test_gt_scale_step),
+		cmocka_unit_test(test_rotation_keeps_reference),
+		cmocka_unit_test(test_too_few_inliers_is_lost),
+		cmocka_unit_test(test_few_features_keep_reference),
+		cmocka_unit_test(test_restart_keeps_pose),
+		cmocka_unit_test(test_seam_refuses_bad_features),
+	};
+	return cmocka_run_group_tests(tests, setup_world, NULL);
+}
