@@ -429,3 +429,14 @@ void harness_blacken(const char *images, int i, int w, int h)
 		fputc(0, f);
 	assert_int_equal(fclose(f), 0);
 }
+
+void harness_meson_install(const char *root)
+{
+	char *install[] = {(char *)harness_bin("MESON"), "install", "-C",
+			   (char *)harness_bin("MVOD_BUILDDIR"), "--destdir", (char *)root,
+			   "--no-rebuild", "--quiet", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(install, &r), 0);
+	if (!r.exited || r.status)
+		fail_msg("meson install: %s%s", r.out, r.err);
+}

@@ -32,6 +32,8 @@ void harness_write_file(const char *path, const char *text);
 void harness_read_file(const char *path, char *buf, size_t len);
 /* A fresh temporary directory, removed by harness_cleanup(). */
 const char *harness_tmpdir(void);
+/* meson install of the build tree into the DESTDIR root, without a rebuild; a failure fails. */
+void harness_meson_install(const char *root);
 /* "TMPDIR/name" in one of 8 static buffers, reused in turn (so 8 may be held at once). */
 const char *harness_tmp_path(const char *name);
 void harness_cleanup(void);

@@ -33,13 +33,7 @@ static void test_install_and_verify(void **state)
 {
 	(void)state;
 	snprintf(root, sizeof(root), "%s/root", harness_tmpdir());
-	char *install[] = {(char *)harness_bin("MESON"), "install", "-C",
-			   (char *)harness_bin("MVOD_BUILDDIR"), "--destdir", root, "--no-rebuild",
-			   "--quiet", NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(install, &r), 0);
-	if (!r.exited || r.status)
-		fail_msg("meson install: %s%s", r.out, r.err);
+	harness_meson_install(root);
 	/*
 	 * What the root needs besides mvod for the tools to judge it as a system: the units the
 	 * service depends on (sysinit.target, ...), /bin/kill of ExecReload, /etc for users.
@@ -53,6 +47,7 @@ static void test_install_and_verify(void **state)
 	char rootopt[320];
 	snprintf(rootopt, sizeof(rootopt), "--root=%s", root);
 	char *sysusers[] = {"/usr/bin/systemd-sysusers", rootopt, NULL};
+	struct run_result r;
 	assert_int_equal(harness_run(sysusers, &r), 0);
 	assert_true(r.exited && r.status == 0);
 	char path[400], line[256];

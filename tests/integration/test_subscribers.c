@@ -92,13 +92,7 @@ static int setup(void **state)
 {
 	(void)state;
 	snprintf(root, sizeof(root), "%s/root", harness_tmpdir());
-	char *install[] = {(char *)harness_bin("MESON"), "install", "-C",
-			   (char *)harness_bin("MVOD_BUILDDIR"), "--destdir", root, "--no-rebuild",
-			   "--quiet", NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(install, &r), 0);
-	if (!r.exited || r.status)
-		fail_msg("meson install: %s%s", r.out, r.err);
+	harness_meson_install(root);
 	snprintf(prefix, sizeof(prefix), "%s%s", root, harness_bin("MVOD_PREFIX"));
 	snprintf(pkg_env, sizeof(pkg_env),
 		 "PKG_CONFIG_PATH=%s/%s/pkgconfig PKG_CONFIG_SYSROOT_DIR=%s "
