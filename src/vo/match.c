@@ -114,7 +114,7 @@ static void distance_table(struct mvod_matcher *m, int na, int nb)
 		int b1 = INT_MAX, b2 = INT_MAX, bi = -1;
 		for (int j = 0; j < nb; j++) {
 			const uint64_t *y = m->words_b + (size_t)j * WORDS;
-			int d = mvod_hamming256((const uint8_t *)x, (const uint8_t *)y);
+			int d = mvod_hamming_words(x, y);
 			if (d < b1) {
 				b2 = b1;
 				b1 = d;
