@@ -425,7 +425,7 @@ static void test_log_urls(void **state)
 		{"file:///tmp/a.lcm?mode=wx", NULL},
 		{"file://?mode=w", ""},               /* no path: -ENAMETOOLONG, refused */
 		{"memq://", NULL},
-		{"udpm://239.255.76.67:7667?ttl=0", NULL},
+		{"tcpq://127.0.0.1:7700", NULL}, /* parsed only: no test sends beyond memq/file */
 		{NULL, NULL},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
