@@ -331,6 +331,10 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 		.uptime_s = now - r->t_start,
 		.state = r->state,
 		.faults = r->faults.bits,
+		.map_points = res->map_points,
+		.keyframes = res->keyframes,
+		.scale = res->scale,
+		.scale_confidence = res->scale_confidence,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		st.stage_ms[k] = r->stage_total[k] / n;

@@ -43,6 +43,10 @@ struct mvod_status {
 	double uptime_s;
 	enum mvod_run_state state;
 	int32_t faults; /* mvod.status_t FAULT_ bits */
+	int map_points, keyframes; /* map mode's map, of the last frame (0 in two-view mode) */
+	double scale;              /* metres per output unit, 0 when unknown */
+	double scale_confidence;   /* 0-1 */
+	double latency_ms;         /* capture to publish of the last frame, milliseconds */
 };
 
 struct mvod_run_opts {

@@ -34,6 +34,9 @@ enum mvod_scale_source {
 	MVOD_SCALE_CONSTANT_SPEED = 2, /* structure failed: the previous speed was kept */
 	MVOD_SCALE_GROUND_TRUTH = 3,   /* --scale gt */
 	MVOD_SCALE_UNIT = 4,           /* first step of a free-scale run: length 1 defines the unit */
+	MVOD_SCALE_MAP = 5,            /* map mode: the pose comes from the map, which carries one scale */
+	MVOD_SCALE_HEIGHT = 6,         /* metres from the camera's known height above the ground */
+	MVOD_SCALE_EXTERNAL = 7,       /* metres from the robot's own speed (mvod.speed_t) */
 };
 
 enum mvod_scale_mode {
@@ -127,6 +130,12 @@ struct mvod_vo_result {
 	int features;    /* keypoints detected */
 	int matches;     /* matches after ratio test / cross-check */
 	int inliers;     /* E-RANSAC inliers in front of both cameras */
+	bool keyframe;   /* map mode: this frame became a keyframe */
+	double quality;  /* 0-1: inliers against what tracking needs (0 when not tracked) */
+	int map_points;  /* map mode: points in the map (0 in two-view mode) */
+	int keyframes;   /* map mode: keyframes in the map */
+	double scale;    /* metres per unit of the output, 0 when unknown (free scale) */
+	double scale_confidence; /* 0-1, 0 when the scale is unknown */
 	double ms[MVOD_STAGE_COUNT]; /* stage times for this frame (capture is the caller's) */
 };
 

@@ -51,7 +51,9 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 	v->scale_source = msg->scale_source;
 	/* A held frame (SCALE_NONE) has no step, and says nothing about the run's scale. */
 	if (msg->scale_source != MVOD_POSE_T_SCALE_NONE)
-		v->metric = msg->scale_source == MVOD_POSE_T_SCALE_GROUND_TRUTH;
+		v->metric = msg->scale_source == MVOD_POSE_T_SCALE_GROUND_TRUTH ||
+			    msg->scale_source == MVOD_POSE_T_SCALE_HEIGHT ||
+			    msg->scale_source == MVOD_POSE_T_SCALE_EXTERNAL;
 	v->frame_status = msg->frame_status;
 	v->features = msg->features;
 	v->matches = msg->matches;

@@ -32,7 +32,7 @@ const char *mvod_frame_status_name(enum mvod_frame_status s)
 const char *mvod_scale_source_name(enum mvod_scale_source s)
 {
 	static const char *const names[] = {"none", "structure", "constant-speed", "ground-truth",
-					    "unit"};
+					    "unit", "map", "height", "external"};
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
 }
 

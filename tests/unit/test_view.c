@@ -183,6 +183,9 @@ static void test_unit_follows_scale_source(void **state)
 		{MVOD_POSE_T_SCALE_NONE, "m", "position [m]"},
 		{MVOD_POSE_T_SCALE_STRUCTURE, "units, free scale", "position [units]"},
 		{MVOD_POSE_T_SCALE_NONE, "units, free scale", "position [units]"},
+		{MVOD_POSE_T_SCALE_HEIGHT, "m", "position [m]"},
+		{MVOD_POSE_T_SCALE_MAP, "units, free scale", "position [units]"},
+		{MVOD_POSE_T_SCALE_EXTERNAL, "m", "position [m]"},
 	};
 	for (size_t i = 0; i < sizeof(steps) / sizeof(steps[0]); i++) {
 		mvod_pose_t p = pose_at((double)i, 0);
