@@ -27,12 +27,17 @@ void mvod_path_motion(const double *xyz, int n, double *length, double *extent);
 double mvod_ate_rmse(const double *src, const double *dst, int n, const double R[9],
 		     const double t[3], double s);
 
+/* Steps per window of mvod_scale_drift: ../shared/eval.py's 20. */
+#define MVOD_DRIFT_WINDOW 20
+
 /*
- * Scale drift of a run, positions n x 3 as for mvod_umeyama: the ratio of estimated to
- * ground-truth path length over the last 10 % of the steps (at least one), divided by the same
- * ratio over the first 10 %. 1.0 = no drift; a global scale cancels, so no alignment is needed.
- * Returns -EINVAL for n < 2 or when either window has no ground-truth motion (<= 1 mm) or the
- * first has no estimated motion.
+ * Scale drift of a run, positions n x 3 as for mvod_umeyama, defined as ../shared/eval.py does:
+ * the estimated path length over each whole window of MVOD_DRIFT_WINDOW steps divided by the
+ * ground truth's (windows without ground-truth motion, <= 1 um, skipped), then the largest of
+ * those ratios over the smallest. 1.0 = the scale held; a global scale cancels, so no alignment
+ * is needed; INFINITY when the estimate stood still through a moving window. Returns -EINVAL
+ * when no whole window has ground-truth motion (fewer than 21 frames, a standing camera) or the
+ * estimate never moved.
  */
 int mvod_scale_drift(const double *est, const double *gt, int n, double *drift);
 

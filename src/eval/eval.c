@@ -96,14 +96,21 @@ void mvod_path_motion(const double *xyz, int n, double *length, double *extent)
 
 int mvod_scale_drift(const double *est, const double *gt, int n, double *drift)
 {
-	if (n < 2)
+	double lo = INFINITY, hi = 0;
+	int windows = 0;
+	/* Steps 1..n-1; window k covers steps 20k+1 .. 20k+20, the whole windows only. */
+	for (int first = 1; first + MVOD_DRIFT_WINDOW <= n; first += MVOD_DRIFT_WINDOW) {
+		double g = path_len(gt, first, MVOD_DRIFT_WINDOW);
+		if (g <= 1e-6) /* eval.py's threshold: a standing window has no scale */
+			continue;
+		double s = path_len(est, first, MVOD_DRIFT_WINDOW) / g;
+		lo = fmin(lo, s);
+		hi = fmax(hi, s);
+		windows++;
+	}
+	if (!windows || hi <= 0)
 		return -EINVAL;
-	int k = (n - 1) / 10 > 1 ? (n - 1) / 10 : 1;
-	double e0 = path_len(est, 1, k), g0 = path_len(gt, 1, k);
-	double e1 = path_len(est, n - k, k), g1 = path_len(gt, n - k, k);
-	if (g0 <= MIN_STEP_M || g1 <= MIN_STEP_M || e0 <= 0)
-		return -EINVAL;
-	*drift = (e1 / g1) / (e0 / g0);
+	*drift = lo > 0 ? hi / lo : INFINITY; /* a window the estimate stood through: collapsed */
 	return 0;
 }
 

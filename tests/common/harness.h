@@ -76,7 +76,7 @@ struct traj_errors {
 	double scale;     /* similarity scale of the alignment (1 for SE(3)) */
 	double length_m;  /* ground-truth path length */
 	double max_translation; /* largest |t| of the estimate (drift of a static camera) */
-	double scale_drift; /* mvod_scale_drift: last 10 % against the first; NAN if undefined */
+	double scale_drift; /* mvod_scale_drift: largest over smallest 20-step window scale; NAN if undefined */
 };
 void harness_compare(const char *est_path, const char *gt_path, int sim3, struct traj_errors *e);
 

@@ -129,12 +129,13 @@ static void test_turn_fisheye_lens(void **state)
 /*
  * Free scale on a path whose speed keeps changing: from 0.5 to 1.5 m/s, braking to a stop,
  * standing, pulling away (mvod-synth's stop-go). Measured: ATE 1.29 % of the path, scale drift
- * 0.614 (the scale of the last 10 % of the path against the first). That is no better than
- * carrying the last step forward (constant speed alone: 1.53 %, 0.682): at 0.1 m steps fewer
+ * 1.31 (largest over smallest scale of 20-step windows; the last 10 % of the path against the
+ * first: 0.614). That is no better than carrying the last step forward (constant speed alone:
+ * 1.53 %, last against first 0.682): at 0.1 m steps fewer
  * than 10 point pairs lie within the 50 baselines structure scale needs in most frames, and
  * where it does work it drifts (issue: free-scale drift on variable speed). Until the VO does
- * better, the bounds catch a scale that collapses or blows up: drift within a factor of 2
- * either way, ATE twice the measured.
+ * better, the bounds catch a scale that collapses or blows up: windows' scales within a factor
+ * of 2 of each other, ATE twice the measured.
  */
 static void test_stop_go_free_scale(void **state)
 {
@@ -144,7 +145,7 @@ static void test_stop_go_free_scale(void **state)
 	print_message("stop-go: scale drift %.4f\n", e.scale_drift);
 	assert_true(e.rpe.rot_deg_mean < 0.16); /* measured 0.061 */
 	assert_true(e.ate_m < 0.026 * e.length_m);
-	assert_true(fabs(log(e.scale_drift)) < log(2.0));
+	assert_true(e.scale_drift < 2.0);
 }
 
 static void test_static_no_drift(void **state)

@@ -286,12 +286,23 @@ static void test_scale_drift_halved(void **state)
 		g[3 * i + 2] = i;
 		e[3 * i + 2] = e[3 * i - 1] + (i > 50 ? 0.5 : 1.0);
 	}
+	/* Windows of steps 1-20, 21-40: 1; 41-60: 0.75; 61-80, 81-100: 0.5. Largest over smallest. */
 	assert_int_equal(mvod_scale_drift(e, g, 101, &drift), 0);
-	assert_true(fabs(drift - 0.5) < 1e-12);
-	/* No motion in a window, or a single frame: no ratio exists. */
+	assert_true(fabs(drift - 2.0) < 1e-12);
+	/* Only the first three windows (61 frames): 1 / 0.75. A partial window does not count. */
+	assert_int_equal(mvod_scale_drift(e, g, 70, &drift), 0);
+	assert_true(fabs(drift - 1.0 / 0.75) < 1e-12);
+	/* No whole window, or no motion in any: no ratio exists. */
 	assert_int_equal(mvod_scale_drift(e, g, 1, &drift), -EINVAL);
+	assert_int_equal(mvod_scale_drift(e, g, 20, &drift), -EINVAL);
 	double still[3 * 101] = {0};
 	assert_int_equal(mvod_scale_drift(e, still, 101, &drift), -EINVAL);
+	assert_int_equal(mvod_scale_drift(still, g, 101, &drift), -EINVAL);
+	/* The estimate stands through the last window while the truth moves: the scale collapsed. */
+	for (int i = 81; i < 101; i++)
+		e[3 * i + 2] = e[3 * 80 + 2];
+	assert_int_equal(mvod_scale_drift(e, g, 101, &drift), 0);
+	assert_true(isinf(drift));
 }
 
 #define KN 1001 /* 1000 m at 1 m steps */
