@@ -173,6 +173,7 @@ static int open_inputs(struct run *r)
 	}
 	mvod_source_info(r->src, &r->info);
 	ret = open_camera(r);
+	r->sum->calib_failed = ret != 0;
 	if (ret)
 		return ret;
 	ret = open_gt(r);
