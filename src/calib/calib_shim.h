@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "mvod/board.h"
+#include "mvod/calibrate.h"
 #include "mvod/calib.h"
 #include "mvod/image.h"
 
@@ -86,6 +87,8 @@ struct mvod_calib_report {
 	double outlier_px;                  /* the drop threshold, drawn on the error chart */
 	double coverage;                    /* fraction of image cells covered */
 	const struct mvod_image *sample;    /* a frame with the board, or NULL */
+	enum mvod_calib_verdict verdict;    /* written in the header, with its advice */
+	const char *advice;                 /* borrowed; NULL: none */
 };
 
 /* One PNG: corner coverage, per-view error, a sample frame before and after undistortion. */

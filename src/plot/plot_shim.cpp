@@ -109,22 +109,15 @@ View fit_view(const Path &est, const Path &gt)
 		PLOT_RECT.height};
 }
 
-/* The smallest 1, 2 or 5 x 10^k that is at least raw. */
 double nice_step(double raw)
 {
-	double p = std::pow(10.0, std::floor(std::log10(raw)));
-	double f = raw / p;
-	return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+	return mvod_plot_nice_step(raw);
 }
 
 std::string tick_label(double value, double step)
 {
-	int decimals = step >= 1 ? 0 : (int)std::ceil(-std::log10(step) - 1e-9);
-	/* Avoids "-0.0" at the origin. */
-	if (std::fabs(value) < step * 1e-6)
-		value = 0;
 	char buf[32];
-	std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
+	mvod_plot_tick_label(value, step, buf, sizeof(buf));
 	return buf;
 }
 
@@ -692,4 +685,20 @@ extern "C" int mvod_plot_chart(const char *path, const char *title,
 			return -EINVAL;
 		return write_image(path, render_chart(title, panels, n_panels));
 	});
+}
+
+extern "C" double mvod_plot_nice_step(double raw)
+{
+	double p = std::pow(10.0, std::floor(std::log10(raw)));
+	double f = raw / p;
+	return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+}
+
+extern "C" void mvod_plot_tick_label(double value, double step, char *buf, size_t len)
+{
+	int decimals = step >= 1 ? 0 : (int)std::ceil(-std::log10(step) - 1e-9);
+	/* Avoids "-0.0" at the origin. */
+	if (std::fabs(value) < step * 1e-6)
+		value = 0;
+	std::snprintf(buf, len, "%.*f", decimals, value);
 }
