@@ -43,6 +43,7 @@ struct scan {
 	int64_t other_size;        /* frames skipped for another image size than the first's */
 	int max_markers, max_corners, max_stray, max_id, diagnosed;
 	char seen[128];            /* what a board-less frame showed instead, or "" */
+	struct mvod_board fits;    /* the spec that would match it; cols 0: none follows */
 	struct mvod_image sample;  /* the frame whose board spans most of the image (report) */
 	float sample_extent;
 };
@@ -169,7 +170,7 @@ static void note_missing(struct scan *sc, struct mvod_calib_det *det, const stru
 	    (sc->frames - 1) % DIAGNOSE_EVERY != 0)
 		return;
 	sc->diagnosed++;
-	if (mvod_calib_diagnose(det, img, sc->seen, sizeof(sc->seen)))
+	if (mvod_calib_diagnose(det, img, &sc->fits, sc->seen, sizeof(sc->seen)))
 		sc->seen[0] = '\0';
 }
 
@@ -300,11 +301,15 @@ static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int 
 				 "corners (a view needs %d): check the square and marker sizes in --board "
 				 "%s, or bring the board closer", sc->max_markers,
 				 (long long)sc->with_markers, sc->max_corners, min_corners(o), spec);
+	char fits[128] = "";
+	if (sc->fits.cols > 0)
+		mvod_board_format(&sc->fits, fits, sizeof(fits));
 	if (sc->seen[0])
 		return mvod_errf(err, errlen, -ENODATA, "no %dx%d %s in %lld frames, but found %s: "
-				 "check --board %s", b->cols, b->rows,
+				 "%s --board %s", b->cols, b->rows,
 				 b->kind == MVOD_BOARD_CHARUCO ? "ChArUco board" : "chessboard",
-				 (long long)sc->frames, sc->seen, spec);
+				 (long long)sc->frames, sc->seen, fits[0] ? "try" : "check",
+				 fits[0] ? fits : spec);
 	return mvod_errf(err, errlen, -ENODATA,
 			 "no board found in %lld frames of %s: check --board %s (%s), the lighting "
 			 "and the focus", (long long)sc->frames, o->source, spec,
