@@ -8,37 +8,52 @@ DEMODIR  ?= demo-out
 PREFIX   ?= /usr/local
 DESTDIR  ?=
 
-# Exactly what the build, the tests and the demo need from Debian 12.
-DEBS := gcc g++ make pkg-config meson ninja-build \
-	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev libcmocka-dev \
-	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev libcamera-dev zlib1g-dev libinih-dev libsystemd-dev \
-	libceres-dev \
-	clang libclang-rt-14-dev valgrind
+# Debian 12 packages. `make deps` (and so `make`, `make demo`, `make install`) installs what
+# building and running mvod need, nothing more: on a Pi's SD card or a robot offline for long,
+# the test tools are dead weight. `make test` adds the test toolchain (make deps-test).
+# libcamera-dev only on request (make deps LIBCAMERA=1): meson builds the libcamera: source
+# when it is installed (-Dlibcamera=auto) and goes on without it.
+DEBS_RUN := gcc g++ make pkg-config meson ninja-build \
+	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev \
+	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev zlib1g-dev \
+	libinih-dev libsystemd-dev libceres-dev
+# cmocka: the test suites; clang and its runtime: libFuzzer; valgrind: the memcheck test.
+DEBS_TEST := libcmocka-dev clang libclang-rt-14-dev valgrind
+DEBS_LIBCAMERA := libcamera-dev
+DEBS := $(DEBS_RUN) $(if $(LIBCAMERA),$(DEBS_LIBCAMERA))
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: all deps build test test-asan test-fuzz fuzz fuzz-run mutate demo bench install clean
+.PHONY: all deps deps-test build test test-asan test-fuzz fuzz fuzz-run mutate demo bench install clean
 
 all: build
 
-deps:
+# Installs those of the packages $(1) that are missing (apt; sudo when not root).
+define apt_missing
 	@missing=""; \
-	for p in $(DEBS); do \
+	for p in $(1); do \
 		dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q 'install ok installed' || \
 			missing="$$missing $$p"; \
 	done; \
 	if [ -n "$$missing" ]; then \
-		echo "make deps: installing$$missing"; \
+		echo "make $@: installing$$missing"; \
 		$(SUDO) apt-get update -qq && \
 		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
 			--no-install-recommends $$missing; \
 	fi
+endef
+
+deps:
+	$(call apt_missing,$(DEBS))
+
+deps-test: deps
+	$(call apt_missing,$(DEBS_TEST))
 
 $(BUILDDIR)/build.ninja:
 	meson setup $(BUILDDIR) --prefix=$(PREFIX)
 
 $(ASANDIR)/build.ninja:
-	meson setup $(ASANDIR) -Dbuildtype=debugoptimized -Db_sanitize=address,undefined \
+	meson setup $(ASANDIR) -Dbuildtype=debugoptimized -Db_sanitize=address,undefined -Dtests=enabled \
 		-Db_lundef=false
 
 # clang with libFuzzer: the library under AddressSanitizer and coverage, the targets linked to
@@ -57,12 +72,15 @@ build: deps $(BUILDDIR)/build.ninja
 
 # Every suite (unit, integration, data), then the unit and integration suites again under
 # AddressSanitizer and UndefinedBehaviorSanitizer, then each fuzz target for a few seconds.
-test: build
+# -Dtests=enabled: a build dir set up by make demo (before cmocka was there) gets its tests.
+test: deps-test build
+	meson configure $(BUILDDIR) -Dtests=enabled
+	meson compile -C $(BUILDDIR)
 	meson test -C $(BUILDDIR) --print-errorlogs
 	$(MAKE) --no-print-directory test-asan
 	$(MAKE) --no-print-directory test-fuzz
 
-test-asan: deps $(ASANDIR)/build.ninja
+test-asan: deps-test $(ASANDIR)/build.ninja
 	meson compile -C $(ASANDIR)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
@@ -79,7 +97,7 @@ fuzz:
 
 # On failure, what libFuzzer reported and each crashing input (base64) come last, where a CI log's
 # tail shows them.
-fuzz-run: deps $(FUZZDIR)/build.ninja
+fuzz-run: deps-test $(FUZZDIR)/build.ninja
 	meson compile -C $(FUZZDIR)
 	@$(FUZZ_ENV) meson test -C $(FUZZDIR) --suite fuzz --print-errorlogs || { \
 		grep -h -E '^(==[0-9]+==ERROR|SUMMARY|ERROR: libFuzzer|    #[0-9] )' \
@@ -92,7 +110,7 @@ fuzz-run: deps $(FUZZDIR)/build.ninja
 # Mutation testing: each edit in tests/mutate/mutations.txt applied to a scratch copy of this
 # tree, built, and run against the tests that must catch it; exit 1 if one survives. Minutes,
 # not part of make test. MUTATE=substring runs only the matching mutations.
-mutate: deps
+mutate: deps-test
 	tests/mutate/run.py $(MUTATE)
 
 demo: build

@@ -172,7 +172,10 @@ static int open_inputs(struct run *r)
 		return ret;
 	}
 	mvod_source_info(r->src, &r->info);
+	if (r->info.times_assumed)
+		LOG(WARN, "%s has no times.txt: timestamps assume 10 Hz", o->source);
 	ret = open_camera(r);
+	r->sum->calib_failed = ret != 0;
 	if (ret)
 		return ret;
 	ret = open_gt(r);

@@ -69,6 +69,12 @@ void mvod_board_corner(const struct mvod_board *b, int i, double xyz[3]);
 int mvod_board_draw(const struct mvod_board *b, int px_per_square, int margin_px,
 		    struct mvod_image *out);
 void mvod_board_image_free(struct mvod_image *img);
+/*
+ * Writes text (one line, ASCII) in grey, centred in the bottom quiet zone of a board image
+ * drawn with margin_px, at most a third of the zone tall and clear of the pattern, so the
+ * printed sheet names its spec. Returns 0 or -errno (-EINVAL: no room for it).
+ */
+int mvod_board_caption(struct mvod_image *img, int margin_px, const char *text);
 
 #ifdef __cplusplus
 }

@@ -47,6 +47,12 @@ enum mvod_calib_verdict {
 	MVOD_VERDICT_POOR_COVERAGE, /* corners miss much of the image, or the tilts are too alike */
 	MVOD_VERDICT_FEW_VIEWS,     /* usable, but too few views to trust the distortion */
 	MVOD_VERDICT_HIGH_ERROR,    /* reprojection error too large: blur, a bent board, wrong spec */
+	/*
+	 * The views cannot all be one camera: frames of another image size, or the two halves of
+	 * the views (in source order) calibrated apart disagree beyond their uncertainty (a
+	 * folder with a stereo pair's left and right images). The fit is a blend of cameras.
+	 */
+	MVOD_VERDICT_MIXED,
 };
 const char *mvod_calib_verdict_name(enum mvod_calib_verdict v);
 
@@ -117,6 +123,21 @@ double mvod_calib_outlier_px(const double *err, int n);
 
 /* Largest angle between the board normals of n poses (rvec, tvec rows of 6), degrees. */
 double mvod_calib_tilt_span_deg(const double *pose, int n);
+
+/* Intrinsics fx, fy, cx, cy (pixels) of a calibration and their standard deviations. */
+struct mvod_calib_k4 {
+	double k[4], std[4];
+};
+
+/*
+ * Whether two calibrations of parts of one set of views cannot be one camera: some intrinsic
+ * differs by more than 5 combined standard deviations (sqrt(sa^2 + sb^2); a chance of about
+ * 1 in 10^6 for one camera with honest deviations) and by more than 1 % of the image width
+ * w (calibrateCamera's deviations are too small when few views share a part). Then says in
+ * why which one, with both values, e.g. "cx 342.4 +- 0.9 px against 328.3 +- 1.1 px".
+ */
+bool mvod_calib_differ(const struct mvod_calib_k4 *a, const struct mvod_calib_k4 *b, int w,
+		       char *why, size_t len);
 
 /* The verdict on a calibration and, in advice, what the user should do about it. */
 enum mvod_calib_verdict mvod_calib_judge(int views, double rms_px, double coverage,

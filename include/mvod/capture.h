@@ -47,6 +47,12 @@ struct mvod_source_info {
 	bool live;
 	/* Lens focus position the camera was locked at (device units); NaN when unknown. */
 	double focus;
+	/*
+	 * The frame times are made up, not read (an image folder without times.txt: 10 Hz). mvod
+	 * run warns, since speeds and the trajectory's times follow them; calibration does not
+	 * use times and says nothing.
+	 */
+	bool times_assumed;
 };
 
 struct mvod_source_ops {

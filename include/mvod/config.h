@@ -54,6 +54,12 @@ struct mvod_config_key {
 	bool optional;             /* strings: empty means none (NULL) */
 	bool flag_value;           /* bools: what the flag sets */
 	bool run_only;             /* only mvod run uses it (LCM): mvod bench refuses its flag */
+	/*
+	 * Unless given, mvod_config_finish derives it from other keys (the trajectory format from
+	 * the trajectory's name): --print-config then writes it as a comment, so that a file made
+	 * from the printout keeps following them when they are edited.
+	 */
+	bool derived;
 	const char *const *choices; /* enums, NULL-terminated, in enum order */
 };
 
@@ -93,7 +99,8 @@ void mvod_config_finish(struct mvod_config *c);
 void mvod_config_apply_log(const struct mvod_config *c);
 
 /*
- * Writes c as an INI file that parses back to the same settings. A value INI cannot carry
+ * Writes c as an INI file that parses back to the same settings; a derived key not given is
+ * written as a comment ("# format = tum"). A value INI cannot carry
  * (a newline, " ;", surrounding blanks, a line too long) is -EINVAL naming the key in err.
  */
 int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t errlen);

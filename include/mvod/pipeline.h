@@ -74,6 +74,12 @@ void mvod_run_opts_default(struct mvod_run_opts *o);
 /* Summary of a finished run (printed by the daemon, asserted by tests). */
 struct mvod_run_summary {
 	int64_t frames, tracked, held;
+	/*
+	 * The run did not start because of its camera model: the calibration is missing,
+	 * unreadable, malformed, of another image size, or absent where the source has none. An
+	 * edit of the configuration fixes it, a restart does not (the daemon's exit status 3).
+	 */
+	bool calib_failed;
 	bool live;       /* frames came through the capture thread */
 	int64_t dropped; /* frames a live source produced that were not processed */
 	/* frames of a dataset source skipped, by mvod_bad_frame reason (live: in dropped) */

@@ -3,6 +3,7 @@
 #define MVOD_PLOT_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "mvod/geom.h"
 #include "mvod/image.h"
@@ -10,6 +11,13 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/*
+ * Axis ticks as every chart of mvod draws them: the step is the smallest 1, 2 or 5 x 10^k at
+ * least raw (> 0), and a tick's label has the decimals the step needs (0.05 -> "0.15").
+ */
+double mvod_plot_nice_step(double raw);
+void mvod_plot_tick_label(double value, double step, char *buf, size_t len);
 
 /* The axes' unit: "m" once ground truth set the scale, "units, free scale" otherwise. */
 const char *mvod_plot_unit(bool metric);

@@ -39,6 +39,12 @@ struct mvod_view {
 	struct mvod_status status;
 	/* State of the newest message of either kind: status also reports a source that is down. */
 	enum mvod_run_state state;
+	/*
+	 * The newest state other than STOPPING: what the run was doing when it stopped (a run
+	 * that never left INITIALIZING ends as one), shown in the big state once mvod stopped.
+	 */
+	enum mvod_run_state last_state;
+	int64_t tracked; /* poses received in state TRACKING: 0 = the run never tracked */
 	/* Receive clock (LCM's recv_utime) of the newest pose, and the pose rate measured on it. */
 	int64_t last_pose_us, rate_start_us, rate_start_poses;
 	double pose_hz; /* NAN until a second of poses has been seen */

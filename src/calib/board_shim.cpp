@@ -1,7 +1,9 @@
 /* Board drawing: OpenCV's aruco module draws ChArUco patterns exactly as its detector expects. */
 #include "mvod/board.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 
@@ -61,4 +63,25 @@ extern "C" void mvod_board_image_free(struct mvod_image *img)
 {
 	std::free(img->data);
 	img->data = nullptr;
+}
+
+extern "C" int mvod_board_caption(struct mvod_image *img, int margin_px, const char *text)
+{
+	/* A quarter of the zone below the pattern, in mid grey: readable, and not a black edge a
+	 * detector would take for part of the board. */
+	const int font = cv::FONT_HERSHEY_SIMPLEX;
+	const double grey = 110;
+	if (margin_px < 12 || img->fmt != MVOD_PIX_GREY)
+		return -EINVAL;
+	return mvod_guarded([&] {
+		cv::Mat dst(img->h, img->w, CV_8UC1, img->data, (size_t)img->stride);
+		int base = 0;
+		cv::Size one = cv::getTextSize(text, font, 1.0, 1, &base);
+		double scale = std::min(margin_px / 4.0 / one.height, (img->w - 2.0 * margin_px) / one.width);
+		int thick = std::max(1, (int)std::lround(scale * 1.5));
+		cv::Size ts = cv::getTextSize(text, font, scale, thick, &base);
+		cv::Point org((img->w - ts.width) / 2, img->h - margin_px / 2 + ts.height / 2);
+		cv::putText(dst, text, org, font, scale, cv::Scalar(grey), thick, cv::LINE_AA);
+		return 0;
+	});
 }

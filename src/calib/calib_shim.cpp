@@ -268,8 +268,9 @@ void detect_charuco(mvod_calib_det &d, const cv::Mat &grey, mvod_calib_found &f)
 		store_corners(d.pts, &d.pt_ids, f);
 }
 
-/* "a chessboard with CxR inner corners" when one of any size is in view. */
-bool find_any_chessboard(const cv::Mat &grey, char *what, size_t len)
+/* "a chessboard with CxR inner corners" when one of any size is in view; fits: that board. */
+bool find_any_chessboard(const mvod_calib_det &d, const cv::Mat &grey, mvod_board &fits,
+			 char *what, size_t len)
 {
 	std::vector<cv::Point2f> pts;
 	cv::Mat meta;
@@ -277,10 +278,17 @@ bool find_any_chessboard(const cv::Mat &grey, char *what, size_t len)
 	    meta.empty())
 		return false;
 	std::snprintf(what, len, "a chessboard with %dx%d inner corners", meta.cols, meta.rows);
+	fits = mvod_board{};
+	fits.kind = MVOD_BOARD_CHESSBOARD;
+	fits.cols = meta.cols;
+	fits.rows = meta.rows;
+	fits.square_m = d.board.square_m;
 	return true;
 }
 
-bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, char *what, size_t len)
+/* Markers of another dictionary; fits: the searched ChArUco board in that dictionary. */
+bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, mvod_board &fits,
+			   char *what, size_t len)
 {
 	auto params = cv::aruco::DetectorParameters::create();
 	for (int k = 0; k < mvod_board_dict_count(); k++) {
@@ -296,6 +304,13 @@ bool find_other_dictionary(const mvod_calib_det &d, const cv::Mat &grey, char *w
 				      mvod_board_dict_family_size(k) > 1
 					      ? " (or a larger dictionary of its family)"
 					      : "");
+			/* A chessboard spec says nothing of the ChArUco board's size: no spec then. */
+			if (d.board.kind == MVOD_BOARD_CHARUCO) {
+				fits = d.board;
+				fits.dict = k;
+				std::snprintf(fits.dict_name, sizeof(fits.dict_name), "%s",
+					      mvod_board_dict_name(k));
+			}
 			return true;
 		}
 	}
@@ -352,14 +367,15 @@ extern "C" int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_ima
 }
 
 extern "C" int mvod_calib_diagnose(struct mvod_calib_det *d, const struct mvod_image *img,
-				   char *what, size_t len)
+				   struct mvod_board *fits, char *what, size_t len)
 {
 	what[0] = '\0';
+	fits->cols = 0;
 	return mvod_guarded([&] {
 		cv::Mat grey = grey_of(*d, *img);
 		detection_image(*d, grey);
-		if (!find_other_dictionary(*d, d->small, what, len))
-			find_any_chessboard(d->small, what, len);
+		if (!find_other_dictionary(*d, d->small, *fits, what, len))
+			find_any_chessboard(*d, d->small, *fits, what, len);
 		return 0;
 	});
 }

@@ -7,6 +7,7 @@
 #include <stdint.h>
 
 #include "mvod/board.h"
+#include "mvod/calibrate.h"
 #include "mvod/calib.h"
 #include "mvod/image.h"
 
@@ -42,10 +43,12 @@ int mvod_calib_detect(struct mvod_calib_det *d, const struct mvod_image *img,
 		      struct mvod_calib_found *f);
 /*
  * For a frame where the board was not found: what the image shows instead, e.g. "markers of
- * DICT_4X4_50" or "a chessboard with 7x5 inner corners", or "" when nothing. Slow (tries
- * every dictionary): for a few frames only.
+ * DICT_4X4_50" or "a chessboard with 7x5 inner corners", or "" when nothing; and in fits the
+ * board spec that would match it (the searched board with that size or dictionary), or
+ * cols 0 when no spec follows from it. Slow (tries every dictionary): for a few frames only.
  */
-int mvod_calib_diagnose(struct mvod_calib_det *d, const struct mvod_image *img, char *what,
+int mvod_calib_diagnose(struct mvod_calib_det *d, const struct mvod_image *img,
+			struct mvod_board *fits, char *what,
 			size_t len);
 
 /* One view for calibration: n corners with their board indices and pixel positions. */
@@ -86,6 +89,8 @@ struct mvod_calib_report {
 	double outlier_px;                  /* the drop threshold, drawn on the error chart */
 	double coverage;                    /* fraction of image cells covered */
 	const struct mvod_image *sample;    /* a frame with the board, or NULL */
+	enum mvod_calib_verdict verdict;    /* written in the header, with its advice */
+	const char *advice;                 /* borrowed; NULL: none */
 };
 
 /* One PNG: corner coverage, per-view error, a sample frame before and after undistortion. */

@@ -26,6 +26,11 @@
 #define ENOUGH_VIEWS 15
 #define GOOD_COVERAGE 0.5
 #define GOOD_TILT_SPAN_DEG 20.0
+/* Two parts of the views are two cameras: see mvod_calib_differ. */
+#define MIXED_SIGMAS 5.0
+#define MIXED_WIDTH_FRAC 0.01
+#define MVOD_XSTR(x) #x
+#define MVOD_STR(x) MVOD_XSTR(x)
 
 void mvod_calib_opts_default(struct mvod_calib_opts *o)
 {
@@ -36,7 +41,8 @@ void mvod_calib_opts_default(struct mvod_calib_opts *o)
 
 const char *mvod_calib_verdict_name(enum mvod_calib_verdict v)
 {
-	static const char *const names[] = {"good", "poor coverage", "too few views", "high error"};
+	static const char *const names[] = {"good", "poor coverage", "too few views", "high error",
+					    "not one camera"};
 	return (unsigned)v < sizeof(names) / sizeof(names[0]) ? names[v] : "unknown";
 }
 
@@ -280,8 +286,9 @@ enum mvod_calib_verdict mvod_calib_judge(int views, double rms_px, double covera
 	}
 	if (views < ENOUGH_VIEWS) {
 		v = v ? v : MVOD_VERDICT_FEW_VIEWS;
-		add_advice(advice, len, "%sOnly %.0f views were usable: record at least 20, with the "
-			   "board in different places and at different tilts.", views);
+		add_advice(advice, len, "%sOnly %.0f views were usable: record at least " 
+			   MVOD_STR(ENOUGH_VIEWS) ", with the board in different places and at "
+			   "different tilts.", views);
 	}
 	if (coverage < GOOD_COVERAGE) {
 		v = v ? v : MVOD_VERDICT_POOR_COVERAGE;
@@ -297,4 +304,24 @@ enum mvod_calib_verdict mvod_calib_judge(int views, double rms_px, double covera
 		snprintf(advice, len, "RMS %.2f px over %d views covering %.0f %% of the image, tilts "
 			 "spanning %.0f deg.", rms_px, views, 100 * coverage, tilt_span_deg);
 	return v;
+}
+
+bool mvod_calib_differ(const struct mvod_calib_k4 *a, const struct mvod_calib_k4 *b, int w,
+		       char *why, size_t len)
+{
+	static const char *const names[] = {"fx", "fy", "cx", "cy"};
+	int worst = -1;
+	double worst_sigmas = 0;
+	for (int i = 0; i < 4; i++) {
+		double d = fabs(a->k[i] - b->k[i]);
+		double sigma = hypot(a->std[i], b->std[i]);
+		if (d > MIXED_SIGMAS * sigma && d > MIXED_WIDTH_FRAC * w && d > worst_sigmas * sigma) {
+			worst = i;
+			worst_sigmas = d / sigma;
+		}
+	}
+	if (worst >= 0)
+		snprintf(why, len, "%s %.1f +- %.1f px against %.1f +- %.1f px", names[worst],
+			 a->k[worst], a->std[worst], b->k[worst], b->std[worst]);
+	return worst >= 0;
 }

@@ -12,18 +12,22 @@
 #include <opencv2/imgproc.hpp>
 
 #include "mvod/calibrate.h"
+#include "mvod/plot.h"
 #include "util/image_file.h"
 #include "util/shim_guard.hpp"
 
 namespace {
 
 /* Four panels of PANEL_W x PANEL_H in two rows, each under a title line. */
-const int PANEL_W = 600, PANEL_H = 450, GAP = 20, TITLE_H = 30, HEADER_H = 44;
+/* The header: the intrinsics, the verdict, and up to two lines of its advice. */
+const int PANEL_W = 600, PANEL_H = 450, GAP = 20, TITLE_H = 30, HEADER_H = 120;
+const int ADVICE_LINES = 2;
+const double ADVICE_FONT = 0.5;
 const int CANVAS_W = 2 * PANEL_W + 3 * GAP;
 const int CANVAS_H = HEADER_H + 2 * (TITLE_H + PANEL_H + GAP);
 const int FONT = cv::FONT_HERSHEY_SIMPLEX;
 const cv::Scalar WHITE(255, 255, 255), BLACK(0, 0, 0), GRID(200, 200, 200), BAR(190, 120, 40),
-	LIMIT(40, 40, 210);
+	LIMIT(40, 40, 210), GOOD(40, 140, 40);
 
 cv::Rect panel(int col, int row)
 {
@@ -88,12 +92,15 @@ void draw_errors(cv::Mat &c, const mvod_calib_report &r)
 	for (int i = 0; i < r.n; i++)
 		top = std::max(top, r.view_rms_px[i]);
 	top = top > 0 ? top * 1.1 : 1.0;
+	/* Four or five ticks at a round step (0.1, 0.2, 0.5, ...), the axis up to the next one. */
+	double step = mvod_plot_nice_step(top / 5);
+	top = step * std::ceil(top / step - 1e-9);
 	auto y_of = [&](double v) { return a.y + a.height - (int)std::lround(v / top * a.height); };
-	for (int k = 0; k <= 4; k++) {
-		double v = top * k / 4;
+	for (int k = 0; k * step <= top * (1 + 1e-9); k++) {
+		double v = k * step;
 		cv::line(c, {a.x, y_of(v)}, {a.x + a.width, y_of(v)}, GRID);
 		char buf[32];
-		std::snprintf(buf, sizeof(buf), "%.2f", v);
+		mvod_plot_tick_label(v, step, buf, sizeof(buf));
 		cv::putText(c, buf, {p.x, y_of(v) + 4}, FONT, 0.4, BLACK, 1, cv::LINE_AA);
 	}
 	double bw = (double)a.width / std::max(1, r.n);
@@ -145,6 +152,37 @@ void draw_samples(cv::Mat &c, const mvod_calib_report &r)
 			   "): straight edges should look straight");
 }
 
+/* The longest prefix of s, cut at a blank, that is at most width pixels wide in the advice font. */
+size_t fit_words(const std::string &s, int width)
+{
+	int base;
+	size_t cut = s.size();
+	while (cut > 0 && cv::getTextSize(s.substr(0, cut), FONT, ADVICE_FONT, 1, &base).width > width) {
+		size_t sp = s.rfind(' ', cut - 1);
+		cut = sp == std::string::npos ? 0 : sp;
+	}
+	return cut;
+}
+
+/* The verdict in colour (green: good), and its advice wrapped at blanks ("..." when cut). */
+void draw_verdict(cv::Mat &c, const mvod_calib_report &r)
+{
+	std::string head = std::string("verdict: ") + mvod_calib_verdict_name(r.verdict);
+	cv::putText(c, head, {GAP, 62}, FONT, 0.7, r.verdict == MVOD_VERDICT_GOOD ? GOOD : LIMIT,
+		    2, cv::LINE_AA);
+	std::string rest = r.advice ? r.advice : "";
+	const int width = CANVAS_W - 2 * GAP, ellipsis = 30;
+	for (int line = 0; line < ADVICE_LINES && !rest.empty(); line++) {
+		bool last = line == ADVICE_LINES - 1;
+		size_t cut = fit_words(rest, width);
+		std::string text = rest.substr(0, cut);
+		if (last && cut < rest.size())
+			text = rest.substr(0, fit_words(rest, width - ellipsis)) + " ...";
+		cv::putText(c, text, {GAP, 86 + 20 * line}, FONT, ADVICE_FONT, BLACK, 1, cv::LINE_AA);
+		rest = cut < rest.size() ? rest.substr(cut + 1) : "";
+	}
+}
+
 } // namespace
 
 extern "C" int mvod_calib_report_write(const char *path, const struct mvod_calib_report *r)
@@ -158,6 +196,7 @@ extern "C" int mvod_calib_report_write(const char *path, const struct mvod_calib
 			      mvod_cam_model_name(r->cam->model), r->cam->fx, r->cam->fy, r->cam->cx,
 			      r->cam->cy);
 		cv::putText(c, head, {GAP, 30}, FONT, 0.7, BLACK, 2, cv::LINE_AA);
+		draw_verdict(c, *r);
 		draw_coverage(c, *r);
 		draw_errors(c, *r);
 		draw_samples(c, *r);

@@ -371,8 +371,7 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
 	ret = start(im, times_path, err, errlen);
 	if (ret < 0)
 		goto fail;
-	if (!im->times_us)
-		LOG(WARN, "%s not found: timestamps assume 10 Hz", times_path);
+	im->info.times_assumed = !im->times_us;
 	return 0;
 fail:
 	mvod_images_close(im);

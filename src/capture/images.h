@@ -25,7 +25,7 @@ struct mvod_images {
 
 /*
  * Lists the images in dir (decoding the first for the frame size) and reads times_path. A
- * missing times_path is no error: timestamps then assume 10 Hz, with one warning. im must be
+ * missing times_path is no error: timestamps then assume 10 Hz (info.times_assumed). im must be
  * zeroed; on failure it is left released and err says why.
  */
 int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_path, char *err,

@@ -823,10 +823,11 @@ static int sweep_plot(const struct bench *b, const struct row *rows, int n)
 		struct mvod_plot_series s = {"configuration", x, y, n, MVOD_PLOT_POINTS,
 					     (const char *const *)labels};
 		struct mvod_plot_panel p = {"median frame time [ms], log scale", "err_avg", &s, 1, true};
-		char path[4096];
+		char path[4096], title[512];
 		snprintf(path, sizeof(path), "%s/sweep.png", b->plots);
-		ret = plot_failed(path, mvod_plot_chart(path, "mvod bench: error against speed", &p,
-							1));
+		snprintf(title, sizeof(title), "mvod bench %s: err_avg against frame time",
+			 b->cfg.run.source);
+		ret = plot_failed(path, mvod_plot_chart(path, title, &p, 1));
 	}
 	free(x);
 	free(labels);

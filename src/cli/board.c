@@ -24,7 +24,8 @@ static void usage(FILE *out)
 "Usage: mvod board --board SPEC --out board.png [--dpi N]\n"
 "Writes a printable calibration target at its exact physical size: each square is\n"
 "SQUARE_M metres when printed at 100 %% (the PNG records its DPI), inside a white border\n"
-"of one square. Says which paper it needs.\n"
+"of one square, which names the spec at the bottom. Says which paper it needs, leaving the\n"
+"6.35 mm (1/4 inch) margins most printers cannot print in.\n"
 "\n"
 "  --board SPEC          charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT (COLSxROWS squares) or\n"
 "                        chessboard:COLSxROWS:SQUARE_M (inner corners) (required)\n"
@@ -69,13 +70,25 @@ static int parse_own(int id, const char *arg, void *ctx)
 	return -ENOENT;
 }
 
-/* Names in buf the smallest standard sheet the w x h mm image fits on; false when none. */
+/*
+ * What printers cannot print at each edge of the sheet: 6.35 mm (a quarter inch) is the
+ * margin most office laser and inkjet printers need; a board wider than the sheet less two of
+ * them loses its edge, or gets shrunk by the driver.
+ */
+#define PRINTER_MARGIN_MM 6.35
+
+/*
+ * Names in buf the smallest standard sheet whose printable area (PRINTER_MARGIN_MM in from
+ * every edge) the w x h mm image fits in; false when none.
+ */
 static bool paper_for(double w, double h, char *buf, size_t len)
 {
 	static const struct {
 		const char *name;
 		double w, h;
 	} papers[] = {{"A4", 210, 297}, {"Letter", 215.9, 279.4}, {"A3", 297, 420}, {"A2", 420, 594}};
+	w += 2 * PRINTER_MARGIN_MM;
+	h += 2 * PRINTER_MARGIN_MM;
 	for (size_t i = 0; i < sizeof(papers) / sizeof(papers[0]); i++) {
 		bool portrait = w <= papers[i].w && h <= papers[i].h;
 		if (portrait || (h <= papers[i].w && w <= papers[i].h)) {
@@ -94,9 +107,12 @@ static void print_advice(const struct cli *c, const struct mvod_image *img, int 
 	printf("%s: wrote %s: %d x %d px at %g dpi = %.1f x %.1f mm, squares of %.2f mm\n", cli_prog,
 	       c->out, img->w, img->h, c->dpi, w, h, square_mm);
 	if (paper_for(w, h, paper, sizeof(paper)))
-		printf("%s: print it on %s", cli_prog, paper);
+		printf("%s: print it on %s, whose %.2f mm printer margins it clears,", cli_prog, paper,
+		       PRINTER_MARGIN_MM);
 	else
-		printf("%s: it needs a sheet of at least %.0f x %.0f mm (larger than A2); print it", cli_prog, w, h);
+		printf("%s: it needs a sheet of at least %.0f x %.0f mm with the printer's margins "
+		       "(larger than A2); print it", cli_prog, w + 2 * PRINTER_MARGIN_MM,
+		       h + 2 * PRINTER_MARGIN_MM);
 	printf(" at 100 %% (\"actual size\", no scaling, not \"fit to page\"), and glue it flat on "
 	       "something rigid\n");
 	const struct mvod_board *b = &c->board;
@@ -122,7 +138,13 @@ static int write_board(const struct cli *c)
 		return -EINVAL;
 	}
 	struct mvod_image img;
+	char caption[256], spec[128];
+	mvod_board_format(&c->board, spec, sizeof(spec));
+	snprintf(caption, sizeof(caption), "mvod board  %s  squares %.2f mm at 100 %%", spec,
+		 pps * MM_PER_INCH / c->dpi);
 	int ret = mvod_board_draw(&c->board, pps, pps, &img);
+	if (!ret)
+		ret = mvod_board_caption(&img, pps, caption);
 	if (!ret)
 		ret = mvod_image_file_write(c->out, ".png", &img, c->dpi);
 	if (ret)

@@ -12,6 +12,12 @@
 #include "mvod/config.h"
 
 #define EXIT_USAGE 2
+/*
+ * mvod run: the configuration names a calibration that is missing, unreadable or does not fit
+ * the camera. Distinct from 1 (a camera absent at boot, which a restart may fix), and in the
+ * unit's RestartPreventExitStatus=, so the service stops instead of restarting every 5 s.
+ */
+#define EXIT_CONFIG 3
 
 /* Prints "mvod CMD: --opt val: expected want" and returns -EINVAL. */
 int cli_bad_value(const char *opt, const char *val, const char *want);

@@ -101,7 +101,8 @@ static void usage(FILE *out)
 "       --trajectory out.kitti --format kitti --plot out.png --lcm-url memq://\n"
 "  mvod --config /etc/mvod/mvod.conf --log-level debug --print-config\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error, 3 when the\n"
+"calibration is missing, unreadable or does not fit the camera (the service then stops).\n");
 }
 
 enum run_opt_id { OPT_CONFIG = CLI_OPT_OWN, OPT_PRINT_CONFIG, OPT_LIST_CAMERAS };
@@ -252,7 +253,11 @@ static int run(struct mvod_config *cfg)
 	mvod_ipc_destroy(ipc);
 	if (!cfg->quiet && !ret)
 		print_summary(cfg, &sum);
-	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
+	if (ret && sum.calib_failed) /* systemctl status shows it beside "status=3" */
+		mvod_notify_status(true, "stopped: the calibration %s is unusable (see the log): "
+					 "fix [calibration] file, then restart",
+				   cfg->run.calib ? cfg->run.calib : "(none given)");
+	return !ret ? EXIT_SUCCESS : sum.calib_failed ? EXIT_CONFIG : EXIT_FAILURE;
 }
 
 int mvod_cmd_run(int argc, char **argv)

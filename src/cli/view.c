@@ -347,6 +347,10 @@ static void print_summary(const struct viewer *w)
 	printf("mvod view: %lld poses, %lld status messages, last state %s",
 	       (long long)w->view.poses, (long long)w->view.statuses,
 	       mvod_run_state_name(w->view.state));
+	if (w->view.state == MVOD_RUN_STOPPING)
+		printf(" (after %s)", mvod_run_state_name(w->view.last_state));
+	printf(", tracked in %lld of %lld poses", (long long)w->view.tracked,
+	       (long long)w->view.poses);
 	if (w->c->png)
 		printf("; %s written %d times", w->c->png, w->png_writes);
 	if (w->end_of_log && w->cut_at >= 0)

@@ -59,7 +59,8 @@ const struct mvod_config_key mvod_config_keys[] = {
 	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
 	{LCM("status-rate", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz), .lo = 0.1, .hi = 100},
 	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
-	CHOICE("output", "format", "format", run.traj_format, mvod_traj_format_names),
+	{KEY("output", "format", "format", MVOD_CONFIG_ENUM, run.traj_format),
+	 .choices = mvod_traj_format_names, .derived = true},
 	OPTSTR("output", "plot", "plot", run.plot),
 	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names),
 	{KEY("log", "quiet", "quiet", MVOD_CONFIG_BOOL, quiet), .short_flag = 'q',
@@ -458,7 +459,9 @@ int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t 
 		if (strcmp(section, k->section) != 0)
 			fprintf(out, "%s[%s]\n", i ? "\n" : "", k->section);
 		section = k->section;
-		fprintf(out, "%s =%s%s\n", k->key, *value ? " " : "", value);
+		bool derived = k->derived && !(c->set & (1ULL << i));
+		fprintf(out, "%s%s =%s%s%s\n", derived ? "# " : "", k->key, *value ? " " : "", value,
+			derived ? "  (not set: follows other keys; uncomment to fix it)" : "");
 	}
 	return ferror(out) ? mvod_errf(err, errlen, -EIO, "write error") : 0;
 }

@@ -109,22 +109,15 @@ View fit_view(const Path &est, const Path &gt)
 		PLOT_RECT.height};
 }
 
-/* The smallest 1, 2 or 5 x 10^k that is at least raw. */
 double nice_step(double raw)
 {
-	double p = std::pow(10.0, std::floor(std::log10(raw)));
-	double f = raw / p;
-	return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+	return mvod_plot_nice_step(raw);
 }
 
 std::string tick_label(double value, double step)
 {
-	int decimals = step >= 1 ? 0 : (int)std::ceil(-std::log10(step) - 1e-9);
-	/* Avoids "-0.0" at the origin. */
-	if (std::fabs(value) < step * 1e-6)
-		value = 0;
 	char buf[32];
-	std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
+	mvod_plot_tick_label(value, step, buf, sizeof(buf));
 	return buf;
 }
 
@@ -157,19 +150,40 @@ void draw_x_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const Vi
 		       tick_label(k * step, step));
 }
 
-/* A logarithmic x axis (the view holds log10 x): ticks at 1, 2 and 5 times powers of ten. */
+/* The values 1, 2 and 5 (or every 1..9) times powers of ten within [lo, hi] of log10 x. */
+std::vector<double> log_ticks(double lo, double hi, bool every_digit)
+{
+	std::vector<double> ticks;
+	for (int k = (int)std::floor(lo); k <= (int)std::ceil(hi); k++)
+		for (int m = 1; m <= 9; m++) {
+			double lx = std::log10((double)m) + k;
+			if ((every_digit || m == 1 || m == 2 || m == 5) && lx >= lo && lx <= hi)
+				ticks.push_back(m * std::pow(10.0, k));
+		}
+	return ticks;
+}
+
+/*
+ * A logarithmic x axis (the view holds log10 x): ticks at 1, 2 and 5 times powers of ten; on
+ * a span too short for three of them at every 1..9; on one shorter still (12 to 19 ms) at
+ * five values evenly spaced on the axis, so the axis always has labels.
+ */
 void draw_x_log_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v)
 {
 	double lo = v.x_at(0), hi = v.x_at(rect.width);
-	for (int k = (int)std::floor(lo); k <= (int)std::ceil(hi); k++)
-		for (double m : {1.0, 2.0, 5.0}) {
-			double lx = std::log10(m) + k;
-			if (lx < lo || lx > hi)
-				continue;
-			char buf[32];
-			std::snprintf(buf, sizeof(buf), "%g", m * std::pow(10.0, k));
-			x_tick(canvas, plot, rect, (int)std::lround(v.px(lx, 0).x), buf);
-		}
+	std::vector<double> ticks = log_ticks(lo, hi, false);
+	if (ticks.size() < 3)
+		ticks = log_ticks(lo, hi, true);
+	if (ticks.size() < 3) {
+		ticks.clear();
+		for (int i = 1; i <= 5; i++)
+			ticks.push_back(std::pow(10.0, lo + (hi - lo) * i / 6));
+	}
+	for (double t : ticks) {
+		char buf[32];
+		std::snprintf(buf, sizeof(buf), "%.3g", t);
+		x_tick(canvas, plot, rect, (int)std::lround(v.px(std::log10(t), 0).x), buf);
+	}
 }
 
 void draw_z_ticks(cv::Mat &canvas, cv::Mat &plot, const cv::Rect &rect, const View &v,
@@ -338,7 +352,20 @@ int segments_under(const cv::Rect &r, const std::vector<cv::Point2d> &pts)
 
 using Drawn = std::vector<std::vector<cv::Point2d>>;
 
-cv::Rect legend_rect(cv::Size area, cv::Size size, const Drawn &paths)
+/* Point markers (with their numbers, 12 px around) r covers. */
+int points_under(const cv::Rect &r, const std::vector<cv::Point2d> &pts)
+{
+	const int reach = 12;
+	cv::Rect grown(r.x - reach, r.y - reach, r.width + 2 * reach, r.height + 2 * reach);
+	int n = 0;
+	for (const cv::Point2d &p : pts)
+		n += grown.contains(cv::Point((int)p.x, (int)p.y)) ? 1 : 0;
+	return n;
+}
+
+/* The corner whose legend hides the fewest path segments and point markers. */
+cv::Rect legend_rect(cv::Size area, cv::Size size, const Drawn &paths,
+		     const std::vector<cv::Point2d> &points)
 {
 	const int m = 10, right = area.width - m - size.width, bottom = area.height - m - size.height;
 	const cv::Point corners[] = {{right, m}, {m, m}, {right, bottom}, {m, bottom}};
@@ -346,7 +373,7 @@ cv::Rect legend_rect(cv::Size area, cv::Size size, const Drawn &paths)
 	int best_hits = -1;
 	for (const cv::Point &c : corners) {
 		cv::Rect r(c, size);
-		int hits = 0;
+		int hits = points_under(r, points);
 		for (const auto &p : paths)
 			hits += segments_under(r, p);
 		if (best_hits < 0 || hits < best_hits) {
@@ -357,14 +384,15 @@ cv::Rect legend_rect(cv::Size area, cv::Size size, const Drawn &paths)
 	return best;
 }
 
-void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries, const Drawn &paths)
+void draw_legend(cv::Mat &plot, const std::vector<LegendEntry> &entries, const Drawn &paths,
+		 const std::vector<cv::Point2d> &points = {})
 {
 	const int row_h = 26, glyph_w = 40, pad = 10;
 	int text_w = 0;
 	for (const LegendEntry &e : entries)
 		text_w = std::max(text_w, text_size(e.label, 0.55).width);
 	cv::Size size(pad + glyph_w + 8 + text_w + pad, 2 * pad + row_h * (int)entries.size() - 6);
-	cv::Rect r = legend_rect(plot.size(), size, paths);
+	cv::Rect r = legend_rect(plot.size(), size, paths, points);
 
 	cv::rectangle(plot, r, WHITE, cv::FILLED);
 	cv::rectangle(plot, r, NEUTRAL, 1);
@@ -536,8 +564,10 @@ void place_number(cv::Mat &plot, cv::Point2d p, const std::string &num,
 	put_text(plot, num, {best.x, best.br().y}, 0.45);
 }
 
+/* Draws s; returns its line's pixels, or for points their markers' (in points). */
 std::vector<cv::Point2d> draw_series(cv::Mat &plot, const View &v, const mvod_plot_panel &p,
-				     const mvod_plot_series &s, const cv::Scalar &color)
+				     const mvod_plot_series &s, const cv::Scalar &color,
+				     std::vector<cv::Point2d> &points)
 {
 	std::vector<cv::Point2d> px;
 	std::vector<int> index;
@@ -557,6 +587,7 @@ std::vector<cv::Point2d> draw_series(cv::Mat &plot, const View &v, const mvod_pl
 	}
 	for (size_t j = 0; s.point_labels && j < px.size(); j++)
 		place_number(plot, px[j], std::to_string(index[j] + 1), taken);
+	points.insert(points.end(), px.begin(), px.end());
 	return {};
 }
 
@@ -594,6 +625,7 @@ void draw_panel(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
 	if (has_key(p))
 		draw_key(canvas, rect, p);
 	Drawn drawn;
+	std::vector<cv::Point2d> points;
 	std::vector<LegendEntry> legend;
 	bool any = false;
 	for (int k = 0; k < p.n_series; k++)
@@ -605,13 +637,13 @@ void draw_panel(cv::Mat &canvas, const cv::Rect &rect, const mvod_plot_panel &p)
 	}
 	for (int k = 0; k < p.n_series; k++) {
 		const mvod_plot_series &s = p.series[k];
-		drawn.push_back(draw_series(plot, v, p, s, series_color(k)));
+		drawn.push_back(draw_series(plot, v, p, s, series_color(k), points));
 		Glyph g = s.style == MVOD_PLOT_POINTS	? Glyph::POINT
 			  : s.style == MVOD_PLOT_DASHED ? Glyph::DASHED
 							: Glyph::LINE;
 		legend.push_back({s.label ? s.label : "", g, series_color(k)});
 	}
-	draw_legend(plot, legend, drawn);
+	draw_legend(plot, legend, drawn, points);
 }
 
 cv::Mat render_chart(const char *title, const mvod_plot_panel *panels, int n)
@@ -692,4 +724,20 @@ extern "C" int mvod_plot_chart(const char *path, const char *title,
 			return -EINVAL;
 		return write_image(path, render_chart(title, panels, n_panels));
 	});
+}
+
+extern "C" double mvod_plot_nice_step(double raw)
+{
+	double p = std::pow(10.0, std::floor(std::log10(raw)));
+	double f = raw / p;
+	return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+}
+
+extern "C" void mvod_plot_tick_label(double value, double step, char *buf, size_t len)
+{
+	int decimals = step >= 1 ? 0 : (int)std::ceil(-std::log10(step) - 1e-9);
+	/* Avoids "-0.0" at the origin. */
+	if (std::fabs(value) < step * 1e-6)
+		value = 0;
+	std::snprintf(buf, len, "%.*f", decimals, value);
 }

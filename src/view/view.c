@@ -41,13 +41,21 @@ static void update_rate(struct mvod_view *v, int64_t recv_us)
 	v->rate_start_poses = v->poses;
 }
 
+static void note_state(struct mvod_view *v, int state)
+{
+	v->state = (enum mvod_run_state)state;
+	if (state != MVOD_RUN_STOPPING)
+		v->last_state = v->state;
+}
+
 void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t recv_us)
 {
 	v->poses++;
 	memcpy(v->pose.t, msg->position, sizeof(v->pose.t));
 	mvod_quat_to_rot(msg->orientation, v->pose.R);
 	v->frame = msg->frame;
-	v->state = (enum mvod_run_state)msg->state;
+	note_state(v, msg->state);
+	v->tracked += msg->state == MVOD_RUN_TRACKING;
 	v->scale_source = msg->scale_source;
 	/* A held frame (SCALE_NONE) has no step, and says nothing about the run's scale. */
 	if (msg->scale_source != MVOD_POSE_T_SCALE_NONE)
@@ -66,7 +74,7 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 void mvod_view_add_status(struct mvod_view *v, const mvod_status_t *msg)
 {
 	v->statuses++;
-	v->state = (enum mvod_run_state)msg->state;
+	note_state(v, msg->state);
 	mvod_status_from_msg(msg, &v->status);
 }
 
@@ -175,5 +183,10 @@ int mvod_view_rows(const struct mvod_view *v, int64_t now_us, struct mvod_view_r
 		row(rows, max_rows, &n, "status", "none yet");
 	row(rows, max_rows, &n, "messages", "%lld poses, %lld status", (long long)v->poses,
 	    (long long)v->statuses);
+	if (v->poses && v->tracked)
+		row(rows, max_rows, &n, "tracked", "%lld of %lld poses", (long long)v->tracked,
+		    (long long)v->poses);
+	else if (v->poses)
+		row(rows, max_rows, &n, "tracked", "never");
 	return n;
 }

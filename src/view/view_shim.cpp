@@ -97,7 +97,15 @@ int draw_state(cv::Mat &panel, const struct mvod_view *v, const char *banner)
 	int y = MARGIN + 16;
 	text(panel, "tracking state", {MARGIN, y}, 0.5, GREY);
 	y += 36;
-	text(panel, mvod_run_state_name(v->state), {MARGIN, y}, 0.95, state_color(v->state), 2);
+	/* Once mvod stopped, the state it stopped in: STOPPING alone would hide how it went. */
+	bool stopped = v->state == MVOD_RUN_STOPPING;
+	enum mvod_run_state shown = stopped ? v->last_state : v->state;
+	text(panel, mvod_run_state_name(shown), {MARGIN, y}, 0.95, state_color(shown), 2);
+	if (stopped) {
+		y += 28;
+		text(panel, v->tracked ? "then mvod stopped" : "then mvod stopped; it never tracked",
+		     {MARGIN, y}, 0.55, v->tracked ? BLACK : state_color(MVOD_RUN_LOST));
+	}
 	if (banner) {
 		y += 28;
 		text(panel, banner, {MARGIN, y}, 0.55, BLACK);

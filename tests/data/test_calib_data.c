@@ -161,15 +161,17 @@ static void test_wrong_specs(void **state)
 	(void)state;
 	const char *charuco = "opencv-charuco/calibration_images";
 	/* The first 50 markers of DICT_6X6_250 are DICT_6X6_50's: the family is what can be told. */
+	/* The advice names the spec that would fit (issue 18), not the wrong one again. */
 	expect_mismatch(charuco, "charuco:5x7:0.04:0.02:DICT_4X4_50",
-			"found 17 markers of DICT_6X6_50 (or a larger dictionary of its family)");
+			"found 17 markers of DICT_6X6_50 (or a larger dictionary of its family): "
+			"try --board charuco:5x7:0.04:0.02:DICT_6X6_50");
 	/* Ids 0-16 on a board with 8 markers. */
 	expect_mismatch(charuco, "charuco:4x4:0.04:0.02:DICT_6X6_250",
 			"ids up to 16 but a 4x4 board has 8");
 	/* The same 17 markers, laid out transposed. */
 	expect_mismatch(charuco, "charuco:7x5:0.04:0.02:DICT_6X6_250", "not arranged as on a 7x5 board");
 	expect_mismatch("opencv-chessboard/images", "chessboard:10x7:0.025",
-			"found a chessboard with 9x6 inner corners");
+			"found a chessboard with 9x6 inner corners: try --board chessboard:9x6:0.025");
 }
 
 int main(void)

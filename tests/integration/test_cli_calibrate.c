@@ -116,6 +116,16 @@ static void test_board_says_how_to_print(void **state)
 	assert_non_null(strstr(r.out, "measure a square"));
 	/* 0.025 m at 300 dpi = 295.3 px, drawn 295 px = 24.98 mm. */
 	assert_non_null(strstr(r.out, "it should be 24.98 mm"));
+	/*
+	 * The issue's case: 6x9 inner corners are 7 x 10 squares, 9 x 12 with the border; at
+	 * 23.31 mm (275 px) that is 209.6 x 279.4 mm, which fits A4's 210 mm only without the
+	 * printer's 6.35 mm margins: A3 then.
+	 */
+	run_mvod((char *[]){"board", "--board", "chessboard:6x9:0.02331", "--out", out, NULL}, &r);
+	assert_int_equal(r.status, 0);
+	if (!strstr(r.out, "= 209.6 x 279.4 mm") || !strstr(r.out, "A3 (portrait)") ||
+	    !strstr(r.out, "6.35 mm printer margins"))
+		fail_msg("a 209.8 mm wide board was put on A4 portrait: %s", r.out);
 }
 
 /* A board's own image, undistorted and frontal, is found: one view, too few to calibrate. */

@@ -2,7 +2,8 @@
  * `meson install` into a DESTDIR, and the installed service files checked by systemd's own
  * tools against that root: systemd-sysusers creates the mvod user (in group video),
  * systemd-tmpfiles creates /var/lib/mvod owned by it, and `systemd-analyze verify` finds
- * nothing to say about mvod.service (its ExecStart binary exists in the root). Exits 77 when
+ * nothing to say about mvod.service nor about an instance of mvod@.service (their ExecStart
+ * binary exists in the root). Exits 77 when
  * systemd-analyze is not installed.
  */
 #include <setjmp.h>
@@ -69,6 +70,18 @@ static void test_install_and_verify(void **state)
 	}
 	char *verify[] = {"/usr/bin/systemd-analyze", "verify", rootopt, "mvod.service", NULL};
 	run_quiet("systemd-analyze verify", verify);
+	/* The instanced unit, one camera per config: instance front reads /etc/mvod/front.conf. */
+	char *verify_at[] = {"/usr/bin/systemd-analyze", "verify", rootopt, "mvod@front.service",
+			     NULL};
+	run_quiet("systemd-analyze verify mvod@front", verify_at);
+	char unit[8192];
+	snprintf(cmd, sizeof(cmd), "find %s -name 'mvod@.service' -path '*/lib/systemd/system/*' "
+		 "-exec cat {} + > %s/unit.txt", root, harness_tmpdir());
+	assert_int_equal(system(cmd), 0);
+	snprintf(path, sizeof(path), "%s/unit.txt", harness_tmpdir());
+	harness_read_file(path, unit, sizeof(unit));
+	assert_non_null(strstr(unit, "mvod run --config /etc/mvod/%i.conf\n"));
+	assert_non_null(strstr(unit, "\nRestartPreventExitStatus=2 3\n"));
 	/* The example config, under whichever prefix the build was set up with. */
 	snprintf(cmd, sizeof(cmd), "find %s -path '*/share/mvod/mvod.conf.example' | grep -q .",
 		 root);

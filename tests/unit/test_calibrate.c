@@ -151,6 +151,37 @@ static void verdicts(void **state)
 	assert_non_null(strstr(a, "Tilt the board more"));
 }
 
+/*
+ * Two halves of the views are two cameras only when an intrinsic differs by more than 5
+ * combined deviations and 1 % of the width (6.4 px at 640): OpenCV's left and right photos
+ * give cx 342.0 and 330.2 +- 0.7 px.
+ */
+static void two_cameras(void **state)
+{
+	(void)state;
+	char why[160] = "";
+	struct mvod_calib_k4 left = {{536, 536, 342.0, 235.5}, {0.5, 0.5, 0.7, 0.7}};
+	struct mvod_calib_k4 right = {{537, 537, 330.2, 241.0}, {0.5, 0.5, 0.7, 0.7}};
+	assert_true(mvod_calib_differ(&left, &right, 640, why, sizeof(why)));
+	assert_string_equal(why, "cx 342.0 +- 0.7 px against 330.2 +- 0.7 px");
+	/* The same 11.8 px with deviations of 3 px: 2.8 sigma, chance. */
+	for (int i = 0; i < 4; i++)
+		left.std[i] = right.std[i] = 3;
+	why[0] = '\0';
+	assert_false(mvod_calib_differ(&left, &right, 640, why, sizeof(why)));
+	assert_string_equal(why, "");
+	/* 40 sigma but 4 px, under 1 % of the width: deviations too small to trust. */
+	struct mvod_calib_k4 a = {{500, 500, 320, 240}, {0.1, 0.1, 0.1, 0.1}}, b = a;
+	b.k[0] = 504;
+	assert_false(mvod_calib_differ(&a, &b, 640, why, sizeof(why)));
+	/* The parameter furthest out is named. */
+	b.k[0] = 520;
+	b.k[3] = 250;
+	assert_true(mvod_calib_differ(&a, &b, 640, why, sizeof(why)));
+	assert_non_null(strstr(why, "fx 500.0"));
+	assert_int_equal(strcmp(mvod_calib_verdict_name(MVOD_VERDICT_MIXED), "not one camera"), 0);
+}
+
 static void file_records_the_calibration(void **state)
 {
 	(void)state;
@@ -199,6 +230,7 @@ int main(void)
 		cmocka_unit_test(outlier_bound),
 		cmocka_unit_test(tilt_span),
 		cmocka_unit_test(verdicts),
+		cmocka_unit_test(two_cameras),
 		cmocka_unit_test(file_records_the_calibration),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -118,6 +118,38 @@ static void test_newest_state_and_rows(void **state)
 	mvod_view_fini(&v);
 }
 
+/*
+ * After mvod's last status (STOPPING) the view keeps the state the run stopped in, and whether
+ * it ever tracked (issue 18: the end-of-log picture always said STOPPING).
+ */
+static void test_state_before_stopping(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	struct mvod_view_row rows[MVOD_VIEW_MAX_ROWS];
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	mvod_pose_t p = pose_at(0, 0);
+	p.state = MVOD_POSE_T_STATE_INITIALIZING;
+	for (int i = 0; i < 3; i++)
+		mvod_view_add_pose(&v, &p, i);
+	mvod_status_t st = {.state = MVOD_POSE_T_STATE_STOPPING};
+	mvod_view_add_status(&v, &st);
+	assert_int_equal(v.state, MVOD_RUN_STOPPING);
+	assert_int_equal(v.last_state, MVOD_RUN_INITIALIZING);
+	assert_int_equal(v.tracked, 0);
+	int n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "tracked"), "never");
+	p.state = MVOD_POSE_T_STATE_TRACKING;
+	mvod_view_add_pose(&v, &p, 4);
+	p.state = MVOD_POSE_T_STATE_LOST;
+	mvod_view_add_pose(&v, &p, 5);
+	mvod_view_add_status(&v, &st);
+	assert_int_equal(v.last_state, MVOD_RUN_LOST);
+	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "tracked"), "1 of 5 poses");
+	mvod_view_fini(&v);
+}
+
 /* The faults mvod reports show by name, and only when there are some. */
 static void test_faults_row(void **state)
 {
@@ -247,6 +279,7 @@ int main(void)
 		cmocka_unit_test(test_rate_and_staleness),
 		cmocka_unit_test(test_memory_fixed),
 		cmocka_unit_test(test_newest_state_and_rows),
+		cmocka_unit_test(test_state_before_stopping),
 		cmocka_unit_test(test_faults_row),
 		cmocka_unit_test(test_plot_draw_checks_image),
 		cmocka_unit_test(test_plot_draw_paints_every_pixel),
