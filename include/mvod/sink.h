@@ -26,7 +26,8 @@ struct mvod_run_summary;
 /* One processed frame, as sinks see it; every pointer is borrowed for the call only. */
 struct mvod_frame_out {
 	const struct mvod_frame *frame;
-	const struct mvod_vo_result *res;
+	const struct mvod_vo_result *res; /* res->pose: the camera's, for the evaluation */
+	const struct mvod_pose *pose; /* what LCM and the trajectory get: in --frame's axes */
 	const struct mvod_pose *gt; /* ground-truth pose of this frame, or NULL */
 	double frame_ms;            /* capture and every VO stage */
 	bool restarted;             /* the VO forgot the scene before this frame (source came back) */

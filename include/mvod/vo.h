@@ -141,6 +141,19 @@ struct mvod_vo_result {
 
 struct mvod_vo;
 
+/*
+ * Whether res is a tracked pose: the state is TRACKING and the frame's motion (or rotation)
+ * was estimated. Frames before the first motion (INITIALIZING, even with a rotation estimate)
+ * and held frames are not. The summary's "tracked" count and the quality use this.
+ */
+bool mvod_vo_tracked(const struct mvod_vo_result *res);
+/*
+ * The pose's quality in [0, 1]: inliers / (MVOD_QUALITY_INLIERS * min_inliers), clamped; 0
+ * when the frame is not tracked. Computed by the run loop for every mode.
+ */
+#define MVOD_QUALITY_INLIERS 5
+double mvod_vo_quality(const struct mvod_vo_params *p, const struct mvod_vo_result *res);
+
 /* Smallest processed frame, pixels each way: ORB's 31-pixel patch must fit inside it. */
 #define MVOD_VO_MIN_PX 32
 
