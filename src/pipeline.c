@@ -253,7 +253,7 @@ static int open_outputs(struct run *r)
 	}
 	struct mvod_sink m;
 	bool gt_scale = o->vo.scale_mode == MVOD_SCALE_MODE_GT;
-	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, &m), &m, true);
+	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, r->gt.n, &m), &m, true);
 	const struct mvod_sink *eval = &r->sinks[0];
 	for (int i = 0; i < o->n_sinks; i++)
 		ret = add_sink(r, ret, &o->sinks[i], false);
