@@ -48,9 +48,9 @@ static int eval_frame(void *ctx, const struct mvod_frame_out *f)
 static void rescale_err(struct mvod_sink_eval *e, struct mvod_run_summary *s, double sc)
 {
 	if (e->lost_pairs) {
-		LOG(WARN, "err_avg is in the estimate's own units, not metres: %d frames more had "
-			  "ground truth than the %d poses of the ground-truth file", e->lost_pairs,
-		    e->max_pairs);
+		LOG(WARN, "err_avg is in the estimate's own units, not metres: %d more frames "
+			  "matched a ground-truth pose than the %d kept for it (twice the ground "
+			  "truth's poses)", e->lost_pairs, e->max_pairs);
 		return;
 	}
 	mvod_rpe_rescale_err(&e->rpe, e->pairs, e->n_pairs, sc);
