@@ -1,5 +1,7 @@
 /*
- * A C subscriber to mvod: prints every pose on MVOD_POSE and every status on MVOD_STATUS.
+ * A C subscriber to mvod: prints every pose on MVOD_POSE2 and every status on MVOD_STATUS2
+ * (mvod.pose2_t and status2_t; mvod publishes the older pose_t and status_t beside them on
+ * MVOD_POSE and MVOD_STATUS, whose constants both use).
  *
  *   cc subscribe.c $(pkg-config --cflags --libs mvod-lcmtypes) -o mvod-subscribe
  *   ./mvod-subscribe 'file:///tmp/run.lcmlog?mode=r&speed=0'   # a log of a run; ends with it
@@ -10,7 +12,9 @@
 #include <string.h>
 
 #include <lcm/lcm.h>
+#include <mvod_pose2_t.h>
 #include <mvod_pose_t.h>
+#include <mvod_status2_t.h>
 #include <mvod_status_t.h>
 
 static const char *const state_names[] = {
@@ -41,7 +45,7 @@ static void print_state(int8_t state)
 		printf("state=%d", state); /* a state newer than these bindings */
 }
 
-static void on_pose(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_pose_t *p,
+static void on_pose(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_pose2_t *p,
 		    void *user)
 {
 	printf("pose frame=%" PRId64 " utime=%" PRId64 " position=%.6f,%.6f,%.6f "
@@ -49,10 +53,10 @@ static void on_pose(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_
 	       p->position[1], p->position[2], p->orientation[0], p->orientation[1],
 	       p->orientation[2], p->orientation[3]);
 	print_state(p->state);
-	printf("\n");
+	printf(" quality=%.3f keyframe=%d\n", p->quality, p->keyframe);
 }
 
-static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_status_t *s,
+static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_status2_t *s,
 		      void *user)
 {
 	printf("status utime=%" PRId64 " frames=%" PRId64 " ", s->utime, s->frames);
@@ -69,7 +73,8 @@ static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, const mvo
 		printf("none");
 	else if (left) /* bits newer than these bindings, in hex */
 		printf("0x%" PRIx32, (uint32_t)left);
-	printf("\n");
+	printf(" map_points=%" PRId32 " keyframes=%" PRId32 " scale=%.6g latency_ms=%.3f\n",
+	       s->map_points, s->keyframes, s->scale, s->latency_ms);
 }
 
 int main(int argc, char **argv)
@@ -85,14 +90,14 @@ int main(int argc, char **argv)
 		return 1;
 	}
 	setvbuf(stdout, NULL, _IOLBF, 0); /* a line per message, also into a pipe */
-	mvod_pose_t_subscription_t *ps = mvod_pose_t_subscribe(lcm, "MVOD_POSE", on_pose, NULL);
-	mvod_status_t_subscription_t *ss =
-		mvod_status_t_subscribe(lcm, "MVOD_STATUS", on_status, NULL);
+	mvod_pose2_t_subscription_t *ps = mvod_pose2_t_subscribe(lcm, "MVOD_POSE2", on_pose, NULL);
+	mvod_status2_t_subscription_t *ss =
+		mvod_status2_t_subscribe(lcm, "MVOD_STATUS2", on_status, NULL);
 	/* LCM's file provider reports the end of a log as an error. */
 	while (lcm_handle(lcm) == 0)
 		;
-	mvod_status_t_unsubscribe(lcm, ss);
-	mvod_pose_t_unsubscribe(lcm, ps);
+	mvod_status2_t_unsubscribe(lcm, ss);
+	mvod_pose2_t_unsubscribe(lcm, ps);
 	lcm_destroy(lcm);
 	return strncmp(argv[1], "file://", 7) == 0 ? 0 : 1;
 }

@@ -1,4 +1,6 @@
-// A C++ subscriber to mvod: prints every pose on MVOD_POSE and every status on MVOD_STATUS.
+// A C++ subscriber to mvod: prints every pose on MVOD_POSE2 and every status on MVOD_STATUS2
+// (mvod::pose2_t and status2_t; mvod publishes the older pose_t and status_t beside them on
+// MVOD_POSE and MVOD_STATUS, whose constants both use).
 //
 //   c++ subscribe.cpp $(pkg-config --cflags --libs mvod-lcmtypes) -o mvod-subscribe-cpp
 //   ./mvod-subscribe-cpp 'file:///tmp/run.lcmlog?mode=r&speed=0'   # a log of a run; ends with it
@@ -8,10 +10,14 @@
 #include <string>
 
 #include <lcm/lcm-cpp.hpp>
+#include <mvod/pose2_t.hpp>
 #include <mvod/pose_t.hpp>
+#include <mvod/status2_t.hpp>
 #include <mvod/status_t.hpp>
 
+using mvod::pose2_t;
 using mvod::pose_t;
+using mvod::status2_t;
 using mvod::status_t;
 
 static std::string state_name(int8_t state)
@@ -51,19 +57,22 @@ static std::string fault_names(int32_t faults)
 }
 
 struct Printer {
-	void pose(const lcm::ReceiveBuffer *, const std::string &, const pose_t *p)
+	void pose(const lcm::ReceiveBuffer *, const std::string &, const pose2_t *p)
 	{
 		std::printf("pose frame=%" PRId64 " utime=%" PRId64 " position=%.6f,%.6f,%.6f "
-			    "orientation=%.6f,%.6f,%.6f,%.6f state=%s\n", p->frame, p->utime,
-			    p->position[0], p->position[1], p->position[2], p->orientation[0],
-			    p->orientation[1], p->orientation[2], p->orientation[3],
-			    state_name(p->state).c_str());
+			    "orientation=%.6f,%.6f,%.6f,%.6f state=%s quality=%.3f keyframe=%d\n",
+			    p->frame, p->utime, p->position[0], p->position[1], p->position[2],
+			    p->orientation[0], p->orientation[1], p->orientation[2],
+			    p->orientation[3], state_name(p->state).c_str(), p->quality,
+			    p->keyframe);
 	}
-	void status(const lcm::ReceiveBuffer *, const std::string &, const status_t *s)
+	void status(const lcm::ReceiveBuffer *, const std::string &, const status2_t *s)
 	{
-		std::printf("status utime=%" PRId64 " frames=%" PRId64 " state=%s faults=%s\n",
-			    s->utime, s->frames, state_name(s->state).c_str(),
-			    fault_names(s->faults).c_str());
+		std::printf("status utime=%" PRId64 " frames=%" PRId64 " state=%s faults=%s "
+			    "map_points=%" PRId32 " keyframes=%" PRId32 " scale=%.6g "
+			    "latency_ms=%.3f\n", s->utime, s->frames, state_name(s->state).c_str(),
+			    fault_names(s->faults).c_str(), s->map_points, s->keyframes, s->scale,
+			    s->latency_ms);
 	}
 };
 
@@ -81,8 +90,8 @@ int main(int argc, char **argv)
 	}
 	std::setvbuf(stdout, nullptr, _IOLBF, 0); // a line per message, also into a pipe
 	Printer printer;
-	lcm.subscribe("MVOD_POSE", &Printer::pose, &printer);
-	lcm.subscribe("MVOD_STATUS", &Printer::status, &printer);
+	lcm.subscribe("MVOD_POSE2", &Printer::pose, &printer);
+	lcm.subscribe("MVOD_STATUS2", &Printer::status, &printer);
 	// LCM's file provider reports the end of a log as an error.
 	while (lcm.handle() == 0)
 		;

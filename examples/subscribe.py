@@ -1,5 +1,8 @@
 #!/usr/bin/env python3
-"""A Python subscriber to mvod: prints every pose on MVOD_POSE and every status on MVOD_STATUS.
+"""A Python subscriber to mvod: prints every pose on MVOD_POSE2 and every status on MVOD_STATUS2.
+
+(mvod.pose2_t and status2_t; mvod publishes the older pose_t and status_t beside them on MVOD_POSE
+and MVOD_STATUS, whose constants both use.)
 
   PYTHONPATH=$(pkg-config --variable=pythondir mvod-lcmtypes) \\
       python3 subscribe.py 'file:///tmp/run.lcmlog?mode=r&speed=0'  # a log of a run; ends with it
@@ -10,7 +13,7 @@ Needs LCM's Python module (pip install lcm) and mvod's generated package (import
 import sys
 
 import lcm
-from mvod import pose_t, status_t
+from mvod import pose2_t, pose_t, status2_t, status_t
 
 STATE_NAMES = {getattr(pose_t, n): n[len("STATE_"):] for n in dir(pose_t) if n.startswith("STATE_")}
 FAULT_BITS = sorted((getattr(status_t, n), n[len("FAULT_"):])
@@ -31,16 +34,19 @@ def fault_names(faults):
 
 
 def on_pose(channel, data):
-    p = pose_t.decode(data)
+    p = pose2_t.decode(data)
     print("pose frame=%d utime=%d position=%.6f,%.6f,%.6f orientation=%.6f,%.6f,%.6f,%.6f state=%s"
+          " quality=%.3f keyframe=%d"
           % ((p.frame, p.utime) + tuple(p.position) + tuple(p.orientation)
-             + (state_name(p.state),)), flush=True)
+             + (state_name(p.state), p.quality, p.keyframe)), flush=True)
 
 
 def on_status(channel, data):
-    s = status_t.decode(data)
-    print("status utime=%d frames=%d state=%s faults=%s"
-          % (s.utime, s.frames, state_name(s.state), fault_names(s.faults)), flush=True)
+    s = status2_t.decode(data)
+    print("status utime=%d frames=%d state=%s faults=%s map_points=%d keyframes=%d scale=%.6g"
+          " latency_ms=%.3f"
+          % (s.utime, s.frames, state_name(s.state), fault_names(s.faults), s.map_points,
+             s.keyframes, s.scale, s.latency_ms), flush=True)
 
 
 def main():
@@ -52,8 +58,8 @@ def main():
         lc = lcm.LCM(url)
     except RuntimeError:
         sys.exit("%s: LCM cannot open %s" % (sys.argv[0], url))
-    lc.subscribe("MVOD_POSE", on_pose)
-    lc.subscribe("MVOD_STATUS", on_status)
+    lc.subscribe("MVOD_POSE2", on_pose)
+    lc.subscribe("MVOD_STATUS2", on_status)
     try:
         while True:
             lc.handle()

@@ -6,7 +6,9 @@
 #include <inttypes.h>
 #include <stdio.h>
 
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
 static const struct {
@@ -15,6 +17,8 @@ static const struct {
 } types[] = {
 	{"mvod.pose_t", __mvod_pose_t_get_hash},
 	{"mvod.status_t", __mvod_status_t_get_hash},
+	{"mvod.pose2_t", __mvod_pose2_t_get_hash},
+	{"mvod.status2_t", __mvod_status2_t_get_hash},
 };
 
 int main(void)

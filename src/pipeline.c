@@ -11,6 +11,7 @@
 
 #include "mvod/capture.h"
 #include "mvod/log.h"
+#include "util/body_frame.h"
 #include "util/clock.h"
 #include "util/notify.h"
 #include "util/output.h"
@@ -37,6 +38,9 @@ const char *mvod_run_state_name(enum mvod_run_state s)
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "UNKNOWN";
 }
 
+const char *const mvod_axes_names[] = {"camera", "ros", NULL};
+const char *const mvod_clock_names[] = {"monotonic", "realtime", NULL};
+
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
 	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM, .status_hz = 1};
@@ -53,6 +57,8 @@ struct run {
 	bool gt_from_source;    /* the dataset's: frames before it begins are skipped when needed */
 	int64_t skipped_lead;   /* frames skipped so */
 	struct mvod_vo *vo;
+	struct mvod_body_frame body; /* --frame, --camera-to-body: the output poses' frame */
+	double latency_ms;           /* of the last frame: delivered by the source to published */
 	struct mvod_ipc *ipc;
 	struct mvod_sink sinks[MAX_SINKS]; /* in the order they are called */
 	bool owned[MAX_SINKS];             /* made here: destroyed here */
@@ -162,6 +168,25 @@ static int open_gt(struct run *r)
 	return 0;
 }
 
+/* --frame, --camera-to-body and --clock, against what the source can do. */
+static int check_output_frame(struct run *r)
+{
+	const struct mvod_run_opts *o = r->o;
+	char err[512] = "";
+	int ret = mvod_body_frame_init(o->axes, o->camera_to_body, &r->body, err, sizeof(err));
+	if (ret) {
+		LOG(ERROR, "%s", err);
+		return ret;
+	}
+	if (o->clock == MVOD_CLOCK_REALTIME && !r->info.monotonic) {
+		LOG(ERROR, "--clock realtime: %s stamps its frames with its own times (media time, "
+			   "times.txt, the dataset's), not a clock; only cameras (v4l2:, libcamera:) "
+			   "can: drop --clock", o->source);
+		return -EINVAL;
+	}
+	return 0;
+}
+
 static int open_inputs(struct run *r)
 {
 	char err[512] = "";
@@ -174,8 +199,11 @@ static int open_inputs(struct run *r)
 	mvod_source_info(r->src, &r->info);
 	if (r->info.times_assumed)
 		LOG(WARN, "%s has no times.txt: timestamps assume 10 Hz", o->source);
-	ret = open_camera(r);
-	r->sum->calib_failed = ret != 0;
+	ret = check_output_frame(r);
+	if (!ret) {
+		ret = open_camera(r);
+		r->sum->calib_failed = ret != 0;
+	}
 	if (ret)
 		return ret;
 	ret = open_gt(r);
@@ -229,7 +257,7 @@ static int open_outputs(struct run *r)
 	}
 	struct mvod_sink m;
 	bool gt_scale = o->vo.scale_mode == MVOD_SCALE_MODE_GT;
-	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, &m), &m, true);
+	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, r->gt.n, &m), &m, true);
 	const struct mvod_sink *eval = &r->sinks[0];
 	for (int i = 0; i < o->n_sinks; i++)
 		ret = add_sink(r, ret, &o->sinks[i], false);
@@ -338,6 +366,7 @@ static void publish_status(struct run *r, const struct mvod_frame *f,
 		.keyframes = res->keyframes,
 		.scale = res->scale,
 		.scale_confidence = res->scale_confidence,
+		.latency_ms = r->latency_ms,
 	};
 	for (int k = 0; k < MVOD_STAGE_COUNT; k++)
 		st.stage_ms[k] = r->stage_total[k] / n;
@@ -387,7 +416,7 @@ static double record(struct run *r, const struct mvod_frame *f, const struct mvo
 {
 	struct mvod_run_summary *s = r->sum;
 	s->frames++;
-	s->tracked += res->status == MVOD_FRAME_MOTION || res->status == MVOD_FRAME_ROTATION;
+	s->tracked += mvod_vo_tracked(res);
 	double frame_ms = record_times(r, res);
 	enum mvod_run_state state = (enum mvod_run_state)res->state; /* same values */
 	if (state != r->state) {
@@ -451,9 +480,13 @@ static int process_frame(struct run *r, const struct mvod_frame *f, double captu
 		return ret;
 	}
 	res.ms[MVOD_STAGE_CAPTURE] = capture_ms;
-	struct mvod_frame_out out = {f, &res, gt, record(r, f, &res), r->restarted};
+	res.quality = mvod_vo_quality(&r->o->vo, &res); /* here, once, whatever made the pose */
+	struct mvod_pose pose;
+	mvod_body_frame_apply(&r->body, &res.pose, res.scale > 0 ? res.scale : 1, &pose);
+	struct mvod_frame_out out = {f, &res, &pose, gt, record(r, f, &res), r->restarted};
 	r->restarted = false;
 	ret = sinks_frame(r, &out);
+	r->latency_ms = (double)(mvod_now_us() - f->delivered_us) / 1e3;
 	if (r->faults.status_due || status_periodic_due(r))
 		publish_status(r, f, &res);
 	r->last_frame = *f;
@@ -588,6 +621,8 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 			return read_failed(r, ret);
 		if (epoch != r->epoch)
 			restart_vo(r, &f, epoch);
+		if (r->o->clock == MVOD_CLOCK_REALTIME)
+			f.utime += mvod_realtime_offset_us();
 		/* Logged by the capture thread; status carries it from this frame on. */
 		if (mvod_capture_saw_unreadable(r->cap))
 			mvod_faults_set(&r->faults, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);

@@ -32,6 +32,11 @@ const char *mvod_bad_frame_name(enum mvod_bad_frame why);
 struct mvod_frame {
 	struct mvod_image img; /* borrowed from the source: valid until the next read or close */
 	int64_t utime;         /* source clock (media time, times.txt), microseconds */
+	/*
+	 * When the source delivered it (its read returned), CLOCK_MONOTONIC microseconds: where
+	 * the capture-to-publish latency starts.
+	 */
+	int64_t delivered_us;
 	int64_t index;         /* 0-based frame number in the source */
 	enum mvod_bad_frame bad; /* why, when the read gave -EINVAL */
 };
@@ -53,6 +58,8 @@ struct mvod_source_info {
 	 * use times and says nothing.
 	 */
 	bool times_assumed;
+	/* utime is on CLOCK_MONOTONIC (a camera's buffer time), so it can go out as real time. */
+	bool monotonic;
 };
 
 struct mvod_source_ops {

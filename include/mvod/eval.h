@@ -56,7 +56,15 @@ struct mvod_frame_err {
 	double r_deg; /* |mvod_rot_euler_y(dR_e dR_g^T)|, degrees: heading error only */
 	double d_m;   /* |dt_g - (R_g,i R_e,i^T) dt_e|, metres */
 	double e;     /* (r_deg + d_m) / (0.5 + r_deg + d_m), in [0, 1) */
+	/* d_m's terms: the ground-truth step and the estimated one in its world, d_m = |gt - est| */
+	double gt_step[3], est_step[3];
 };
+/*
+ * e of the same pair with the estimate's translations multiplied by scale (a free-scale
+ * estimate in metres through its Sim(3) alignment's scale): the one definition of err that
+ * mvod bench and mvod run's summary share.
+ */
+double mvod_frame_err_scaled(const struct mvod_frame_err *fe, double scale);
 void mvod_frame_err(const struct mvod_pose *e0, const struct mvod_pose *e1,
 		    const struct mvod_pose *g0, const struct mvod_pose *g1,
 		    struct mvod_frame_err *out);
@@ -85,6 +93,12 @@ struct mvod_frame_err mvod_rpe_add(struct mvod_rpe *acc, const struct mvod_pose 
 				   const struct mvod_pose *e1, const struct mvod_pose *g0,
 				   const struct mvod_pose *g1);
 void mvod_rpe_finish(struct mvod_rpe *acc);
+/*
+ * After mvod_rpe_finish: err_avg and err_max again, over the n pairs fe that were added, with
+ * the estimate scaled (mvod_frame_err_scaled).
+ */
+void mvod_rpe_rescale_err(struct mvod_rpe *acc, const struct mvod_frame_err *fe, int n,
+			  double scale);
 
 /*
  * KITTI relative errors, as the official devkit (evaluate_odometry.cpp) computes them: from

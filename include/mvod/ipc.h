@@ -1,4 +1,8 @@
-/* LCM publishing of mvod.pose_t and mvod.status_t. */
+/*
+ * LCM publishing of mvod.pose2_t and mvod.status2_t (on MVOD_POSE2, MVOD_STATUS2) and, beside
+ * them for subscribers built against the first types, mvod.pose_t and mvod.status_t (on
+ * MVOD_POSE, MVOD_STATUS).
+ */
 #ifndef MVOD_IPC_H
 #define MVOD_IPC_H
 
@@ -15,11 +19,14 @@ extern "C" {
 
 #define MVOD_DEFAULT_POSE_CHANNEL "MVOD_POSE"
 #define MVOD_DEFAULT_STATUS_CHANNEL "MVOD_STATUS"
+/* The longest channel name: its v2 channel, one character longer, must fit LCM's limit. */
+#define MVOD_MAX_CHANNEL_LENGTH (LCM_MAX_CHANNEL_NAME_LENGTH - 1)
 
 struct mvod_status; /* mvod/pipeline.h */
 struct mvod_ipc;
 
 /*
+ * Channels: pose_channel and status_channel carry v1, the same names + "2" v2 (MVOD_POSE2).
  * url: an LCM provider URL, or NULL for LCM_DEFAULT_URL and then LCM's own default.
  * Channels NULL = the defaults above. Encoding buffers are allocated here, once.
  * A file://PATH?mode=w URL is written by mvod's own log writer (LCM's event-log format), which,
@@ -59,12 +66,21 @@ int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st);
 
 /*
- * The one conversion between struct mvod_status and the generated mvod.status_t
- * (mvod_status_t.h), both ways: publishing uses the first, mvod view the second.
+ * The one conversion between struct mvod_status and the generated mvod.status2_t
+ * (mvod_status2_t.h), both ways: publishing uses the first, mvod view the second.
  */
+struct _mvod_status2_t;
+void mvod_status_to_msg(const struct mvod_status *st, struct _mvod_status2_t *msg);
+void mvod_status_from_msg(const struct _mvod_status2_t *msg, struct mvod_status *st);
+/*
+ * A v1 message as its v2 type: the same fields, the new ones 0 (mvod view reads logs of
+ * mvod versions that published only v1).
+ */
+struct _mvod_pose_t;
+struct _mvod_pose2_t;
 struct _mvod_status_t;
-void mvod_status_to_msg(const struct mvod_status *st, struct _mvod_status_t *msg);
-void mvod_status_from_msg(const struct _mvod_status_t *msg, struct mvod_status *st);
+void mvod_pose_msg_upgrade(const struct _mvod_pose_t *v1, struct _mvod_pose2_t *v2);
+void mvod_status_msg_upgrade(const struct _mvod_status_t *v1, struct _mvod_status2_t *v2);
 
 #ifdef __cplusplus
 }

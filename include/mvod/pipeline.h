@@ -49,6 +49,20 @@ struct mvod_status {
 	double latency_ms;         /* capture to publish of the last frame, milliseconds */
 };
 
+/* The frame of the poses mvod outputs (LCM, trajectory): --frame. */
+enum mvod_axes {
+	MVOD_AXES_CAMERA = 0, /* the camera's optical frame: x right, y down, z forward */
+	MVOD_AXES_ROS = 1,    /* a body frame, ROS REP 103: x forward, y left, z up */
+};
+extern const char *const mvod_axes_names[]; /* "camera", "ros", NULL */
+
+/* The clock of live cameras' frame times (utime): --clock. */
+enum mvod_clock {
+	MVOD_CLOCK_MONOTONIC = 0, /* CLOCK_MONOTONIC, as the driver stamps the buffer */
+	MVOD_CLOCK_REALTIME = 1,  /* the same instant on CLOCK_REALTIME (Unix time) */
+};
+extern const char *const mvod_clock_names[]; /* "monotonic", "realtime", NULL */
+
 struct mvod_run_opts {
 	const char *source;     /* URI */
 	const char *calib;      /* file, or NULL when the source carries intrinsics */
@@ -67,6 +81,9 @@ struct mvod_run_opts {
 	double status_hz;       /* periodic mvod.status_t (and systemd STATUS=) rate. 1 */
 	/* Set (by SIGHUP) to have the run reopen its trajectory by name; cleared when done. */
 	volatile sig_atomic_t *reopen;
+	enum mvod_axes axes;           /* camera */
+	const char *camera_to_body;    /* "x,y,z,qx,qy,qz,qw" with axes ros, or NULL */
+	enum mvod_clock clock;         /* monotonic; realtime only for live cameras */
 	struct mvod_vo_params vo;
 };
 void mvod_run_opts_default(struct mvod_run_opts *o);

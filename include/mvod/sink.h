@@ -26,7 +26,8 @@ struct mvod_run_summary;
 /* One processed frame, as sinks see it; every pointer is borrowed for the call only. */
 struct mvod_frame_out {
 	const struct mvod_frame *frame;
-	const struct mvod_vo_result *res;
+	const struct mvod_vo_result *res; /* res->pose: the camera's, for the evaluation */
+	const struct mvod_pose *pose; /* what LCM and the trajectory get: in --frame's axes */
 	const struct mvod_pose *gt; /* ground-truth pose of this frame, or NULL */
 	double frame_ms;            /* capture and every VO stage */
 	bool restarted;             /* the VO forgot the scene before this frame (source came back) */
@@ -83,9 +84,11 @@ int mvod_sink_notify_create(struct mvod_sink *out);
 
 /*
  * Evaluation against ground truth: the paths, RPE, ground-truth path length, and at finish the
- * ATE after an SE(3) (sim3 false) or Sim(3) alignment, into the summary.
+ * ATE after an SE(3) (sim3 false) or Sim(3) alignment, into the summary. With sim3, err_avg
+ * and err_max are computed at finish on the estimate scaled by the alignment (as mvod bench
+ * does); gt_poses, the ground truth's pose count, sizes what that keeps.
  */
-int mvod_sink_eval_create(bool sim3, struct mvod_sink *out);
+int mvod_sink_eval_create(bool sim3, int gt_poses, struct mvod_sink *out);
 /* The --plot PNG of the evaluation's paths, written at finish; eval is borrowed. */
 int mvod_sink_plot_create(const char *path, const char *source, bool gt_scale,
 			  const struct mvod_sink *eval, struct mvod_sink *out);

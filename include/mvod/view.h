@@ -18,9 +18,11 @@
 extern "C" {
 #endif
 
-/* The generated LCM types (mvod_pose_t.h, mvod_status_t.h); only the viewer's feeders need them. */
+/* The generated LCM types (mvod_pose2_t.h, ...); only the viewer's feeders need them. */
 struct _mvod_pose_t;
 struct _mvod_status_t;
+struct _mvod_pose2_t;
+struct _mvod_status2_t;
 
 struct mvod_view {
 	struct mvod_path path; /* every position received, decimated to a fixed size */
@@ -35,6 +37,9 @@ struct mvod_view {
 	 */
 	bool metric;
 	int features, matches, inliers;
+	double quality; /* 0-1 (v2 poses; 0 from v1) */
+	/* A v2 message came (mvod.pose2_t or status2_t): the v1 ones are ignored from then on. */
+	bool v2;
 	/* The latest status (valid once statuses > 0). */
 	struct mvod_status status;
 	/* State of the newest message of either kind: status also reports a source that is down. */
@@ -54,7 +59,13 @@ struct mvod_view {
 int mvod_view_init(struct mvod_view *v, int max_poses);
 void mvod_view_fini(struct mvod_view *v);
 
-/* recv_us: when the message arrived (lcm_recv_buf_t.recv_utime), microseconds. */
+/*
+ * recv_us: when the message arrived (lcm_recv_buf_t.recv_utime), microseconds. The v2 types
+ * carry everything; a v1 message (a log of an mvod that published only v1) is taken with the
+ * new fields 0, and ignored once any v2 message came, since mvod publishes both.
+ */
+void mvod_view_add_pose2(struct mvod_view *v, const struct _mvod_pose2_t *msg, int64_t recv_us);
+void mvod_view_add_status2(struct mvod_view *v, const struct _mvod_status2_t *msg);
 void mvod_view_add_pose(struct mvod_view *v, const struct _mvod_pose_t *msg, int64_t recv_us);
 void mvod_view_add_status(struct mvod_view *v, const struct _mvod_status_t *msg);
 
@@ -76,10 +87,10 @@ struct mvod_view_row {
 	char value[48];
 };
 
-#define MVOD_VIEW_MAX_ROWS 16
+#define MVOD_VIEW_MAX_ROWS 20
 /*
- * The numbers beside the plot (frame, rates, dropped frames, features, stage times, RSS,
- * uptime, message counts), as of now_us on the receive clock. Returns the row count.
+ * The numbers beside the plot (frame, rates, dropped frames, features, quality, map points
+ * and keyframes, scale, latency, stage times, RSS, uptime, message counts), as of now_us on the receive clock. Returns the row count.
  */
 int mvod_view_rows(const struct mvod_view *v, int64_t now_us, struct mvod_view_row *rows,
 		   int max_rows);

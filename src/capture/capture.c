@@ -66,6 +66,7 @@ static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct 
 	l->frame.img = (struct mvod_image){.w = in->w, .h = in->h, .stride = (int)row,
 					   .fmt = in->fmt, .data = data};
 	l->frame.utime = f->utime;
+	l->frame.delivered_us = f->delivered_us;
 	l->frame.index = c->base + f->index;
 	l->epoch = c->epoch;
 	c->last = l->frame.index;

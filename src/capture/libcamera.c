@@ -70,7 +70,7 @@ static int lcam_open(void *priv, const char *location, char *err, size_t errlen)
 		return ret;
 	int w = s->mode.width, h = s->mode.height;
 	s->info = (struct mvod_source_info){.width = w, .height = h, .frames = -1, .live = true,
-					    .focus = NAN};
+					    .focus = NAN, .monotonic = true};
 	s->grey = (struct mvod_image){.w = w, .h = h, .stride = w, .fmt = MVOD_PIX_GREY,
 				      .data = malloc((size_t)w * (size_t)h)};
 	ret = s->grey.data ? 0 : -ENOMEM;

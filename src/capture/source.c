@@ -10,6 +10,7 @@
 #include "capture/backends.h"
 #include "capture/libcamera_shim.h"
 #include "capture/v4l2.h"
+#include "util/clock.h"
 
 const struct mvod_source_ops *const mvod_source_backends[] = {
 	&mvod_source_file_ops,
@@ -133,6 +134,7 @@ int mvod_source_read_into(struct mvod_source *src, struct mvod_frame *frame,
 {
 	frame->bad = MVOD_BAD_CORRUPT; /* unless the backend knows better */
 	int ret = src->ops->read(src->priv, frame, into);
+	frame->delivered_us = mvod_now_us();
 	/* Everything downstream is sized from info at start-up; a frame of another size is bad. */
 	if (ret == 0 && (frame->img.w != src->info.width || frame->img.h != src->info.height)) {
 		frame->bad = MVOD_BAD_SIZE;

@@ -373,7 +373,8 @@ static int v4l2_open(void *priv, const char *location, char *err, size_t errlen)
 	v->io = mvod_v4l2_io;
 	v->fd = -1;
 	v->want.format = -1;
-	v->info = (struct mvod_source_info){.frames = -1, .live = true, .focus = NAN};
+	v->info = (struct mvod_source_info){.frames = -1, .live = true, .focus = NAN,
+					    .monotonic = true};
 	int ret = mvod_uri_parse(location, v->path, sizeof(v->path), take_param, &v->want, err,
 				 errlen);
 	if (!ret)

@@ -297,7 +297,8 @@ static int reject_run_only(const struct mvod_config *cfg)
 		if (!mvod_config_keys[k].run_only || !(cfg->set & (1ULL << k)))
 			continue;
 		fprintf(stderr, "%s: --%s applies only to mvod run (the bench publishes nothing over "
-				"LCM); see %s --help\n", cli_prog, mvod_config_keys[k].flag, cli_prog);
+				"LCM, writes no trajectory and evaluates the camera's poses); see %s "
+				"--help\n", cli_prog, mvod_config_keys[k].flag, cli_prog);
 		return -EINVAL;
 	}
 	return 0;

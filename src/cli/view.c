@@ -19,7 +19,9 @@
 #include "mvod/log.h"
 #include "mvod/view.h"
 #include "view/lcmlog.h"
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 #include "util/output.h"
 
@@ -53,8 +55,9 @@ static void usage(FILE *out)
 "                        same as the watched mvod's; an LCM log plays back with\n"
 "                        file:///PATH.lcmlog?mode=r (&speed=0: as fast as possible; the\n"
 "                        default speed=1 replays in real time), and the viewer ends with it\n"
-"  --pose-channel NAME   channel of mvod.pose_t (default MVOD_POSE)\n"
-"  --status-channel NAME channel of mvod.status_t (default MVOD_STATUS)\n"
+"  --pose-channel NAME   channel of mvod.pose_t (default MVOD_POSE); mvod.pose2_t is read\n"
+"                        on NAME2 (MVOD_POSE2), and v1 only from logs without v2\n"
+"  --status-channel NAME channel of mvod.status_t (default MVOD_STATUS; status2_t on NAME2)\n"
 "  --png FILE            no window: draw into FILE (rewritten whole, never half-written)\n"
 "  --every N             with --png: redraw FILE after every N poses (default %d), and at exit\n"
 "  --max-poses N         points of the path kept; longer runs are thinned evenly, so memory\n"
@@ -169,6 +172,8 @@ struct viewer {
 	lcm_t *lcm;
 	mvod_pose_t_subscription_t *pose_sub;
 	mvod_status_t_subscription_t *status_sub;
+	mvod_pose2_t_subscription_t *pose2_sub;
+	mvod_status2_t_subscription_t *status2_sub;
 	struct mvod_view view;
 	struct mvod_view_labels labels;
 	char title[256];
@@ -197,14 +202,35 @@ static void write_png(struct viewer *w)
 	w->png_writes++;
 }
 
+static void after_pose(struct viewer *w)
+{
+	if (w->c->png && w->view.poses - w->png_poses >= w->c->every)
+		write_png(w);
+}
+
+static void on_pose2(const lcm_recv_buf_t *rbuf, const char *ch, const mvod_pose2_t *msg,
+		     void *user)
+{
+	(void)ch;
+	mvod_view_add_pose2(&((struct viewer *)user)->view, msg, rbuf->recv_utime);
+	after_pose(user);
+}
+
+static void on_status2(const lcm_recv_buf_t *rbuf, const char *ch, const mvod_status2_t *msg,
+		       void *user)
+{
+	(void)rbuf;
+	(void)ch;
+	mvod_view_add_status2(&((struct viewer *)user)->view, msg);
+}
+
+/* v1, from logs of an mvod that published nothing else (ignored once v2 came). */
 static void on_pose(const lcm_recv_buf_t *rbuf, const char *ch, const mvod_pose_t *msg,
 		    void *user)
 {
 	(void)ch;
-	struct viewer *w = user;
-	mvod_view_add_pose(&w->view, msg, rbuf->recv_utime);
-	if (w->c->png && w->view.poses - w->png_poses >= w->c->every)
-		write_png(w);
+	mvod_view_add_pose(&((struct viewer *)user)->view, msg, rbuf->recv_utime);
+	after_pose(user);
 }
 
 static void on_status(const lcm_recv_buf_t *rbuf, const char *ch, const mvod_status_t *msg,
@@ -277,10 +303,15 @@ static int open_lcm(struct viewer *w)
 	}
 	const char *pc = w->c->pose_ch ? w->c->pose_ch : MVOD_DEFAULT_POSE_CHANNEL;
 	const char *sc = w->c->status_ch ? w->c->status_ch : MVOD_DEFAULT_STATUS_CHANNEL;
+	char pc2[LCM_MAX_CHANNEL_NAME_LENGTH + 2], sc2[sizeof(pc2)]; /* v2: the name + "2" */
+	snprintf(pc2, sizeof(pc2), "%s2", pc);
+	snprintf(sc2, sizeof(sc2), "%s2", sc);
 	w->pose_sub = mvod_pose_t_subscribe(w->lcm, pc, on_pose, w);
 	w->status_sub = mvod_status_t_subscribe(w->lcm, sc, on_status, w);
-	if (!w->pose_sub || !w->status_sub) {
-		LOG(ERROR, "cannot subscribe to %s and %s", pc, sc);
+	w->pose2_sub = mvod_pose2_t_subscribe(w->lcm, pc2, on_pose2, w);
+	w->status2_sub = mvod_status2_t_subscribe(w->lcm, sc2, on_status2, w);
+	if (!w->pose_sub || !w->status_sub || !w->pose2_sub || !w->status2_sub) {
+		LOG(ERROR, "cannot subscribe to %s, %s, %s and %s", pc, sc, pc2, sc2);
 		return -EINVAL;
 	}
 	snprintf(w->title, sizeof(w->title), "mvod view: %s on %s", pc,
@@ -339,6 +370,10 @@ static void close_lcm(struct viewer *w)
 		mvod_pose_t_unsubscribe(w->lcm, w->pose_sub);
 	if (w->status_sub)
 		mvod_status_t_unsubscribe(w->lcm, w->status_sub);
+	if (w->pose2_sub)
+		mvod_pose2_t_unsubscribe(w->lcm, w->pose2_sub);
+	if (w->status2_sub)
+		mvod_status2_t_unsubscribe(w->lcm, w->status2_sub);
 	lcm_destroy(w->lcm);
 }
 

@@ -19,6 +19,8 @@ _Static_assert(sizeof(enum mvod_detector) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_matcher_kind) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_traj_format) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_axes) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_clock) == sizeof(int), "enum size");
 
 static const char *const scale_choices[] = {"auto", "gt", NULL};
 
@@ -37,6 +39,8 @@ const struct mvod_config_key mvod_config_keys[] = {
 	OPTSTR("source", "uri", "source", run.source),
 	NUM("source", "max-frames", MVOD_CONFIG_INT64, run.max_frames, 0, 1e12),
 	OPTSTR("source", "gt", "gt", run.gt),
+	{KEY("source", "clock", "clock", MVOD_CONFIG_ENUM, run.clock), .choices = mvod_clock_names,
+	 .run_only = true},
 	OPTSTR("calibration", "file", "calib", run.calib),
 	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
 	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
@@ -54,14 +58,19 @@ const struct mvod_config_key mvod_config_keys[] = {
 	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false},
 	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true},
 	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel),
-	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
+	 .hi = MVOD_MAX_CHANNEL_LENGTH},
 	{LCM("status-channel", "status-channel", MVOD_CONFIG_STRING, status_channel),
-	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
+	 .hi = MVOD_MAX_CHANNEL_LENGTH},
 	{LCM("status-rate", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz), .lo = 0.1, .hi = 100},
 	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
 	{KEY("output", "format", "format", MVOD_CONFIG_ENUM, run.traj_format),
 	 .choices = mvod_traj_format_names, .derived = true},
 	OPTSTR("output", "plot", "plot", run.plot),
+	/* Poses in a robot's frame: mvod run's outputs; bench evaluates the camera's. */
+	{KEY("output", "frame", "frame", MVOD_CONFIG_ENUM, run.axes), .choices = mvod_axes_names,
+	 .run_only = true},
+	{KEY("output", "camera-to-body", "camera-to-body", MVOD_CONFIG_STRING, run.camera_to_body),
+	 .optional = true, .run_only = true},
 	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names),
 	{KEY("log", "quiet", "quiet", MVOD_CONFIG_BOOL, quiet), .short_flag = 'q',
 	 .flag_value = true},
@@ -178,7 +187,7 @@ static int set_value(struct mvod_config *c, int ki, const char *text, char *err,
 			return mvod_errf(err, errlen, -EINVAL, "a non-empty value");
 		if (k->hi > 0 && strlen(text) > k->hi)
 			return mvod_errf(err, errlen, -EINVAL, "at most %.0f characters (LCM's limit "
-					 "for a channel name), not %zu", k->hi, strlen(text));
+					 "for a channel name, less the 2 of its v2 channel), not %zu", k->hi, strlen(text));
 		drop_string(c, ki);
 		*(const char **)dst = *text ? text : NULL;
 		return 0;

@@ -143,9 +143,19 @@ void mvod_frame_err(const struct mvod_pose *e0, const struct mvod_pose *e1,
 	/* The estimated step, carried into the ground truth's world by the current orientation error. */
 	mvod_mat3_mul_bt(g1->R, e1->R, Rge);
 	mvod_mat3_vec(Rge, de.t, te);
+	memcpy(out->gt_step, dg.t, sizeof(out->gt_step));
+	memcpy(out->est_step, te, sizeof(out->est_step));
 	out->d_m = mvod_vec3_dist(dg.t, te);
-	double s = out->r_deg + out->d_m;
-	out->e = s / (0.5 + s);
+	out->e = mvod_frame_err_scaled(out, 1.0);
+}
+
+double mvod_frame_err_scaled(const struct mvod_frame_err *fe, double scale)
+{
+	double est[3];
+	for (int k = 0; k < 3; k++)
+		est[k] = scale * fe->est_step[k];
+	double s = fe->r_deg + mvod_vec3_dist(fe->gt_step, est);
+	return s / (0.5 + s);
 }
 
 /* Relative motion from pose a to pose b, expressed in a's frame: a^-1 b. */
@@ -212,6 +222,15 @@ void mvod_rpe_finish(struct mvod_rpe *acc)
 	if (acc->n_pct)
 		acc->trans_pct_mean /= acc->n_pct;
 	acc->err_avg /= acc->n + 1;
+}
+
+void mvod_rpe_rescale_err(struct mvod_rpe *acc, const struct mvod_frame_err *fe, int n,
+			  double scale)
+{
+	acc->err_avg = acc->err_max = 0;
+	for (int i = 0; i < n; i++)
+		tally(&acc->err_avg, &acc->err_max, mvod_frame_err_scaled(&fe[i], scale));
+	acc->err_avg /= n + 1; /* as mvod_rpe_finish: the first frame's e is 0 */
 }
 
 static const double kitti_len_m[] = {100, 200, 300, 400, 500, 600, 700, 800};

@@ -2,13 +2,17 @@
 
 #include <assert.h>
 #include <errno.h>
+#include <stddef.h>
+#include <stdio.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ipc/lcm_log.h"
 #include "mvod/pipeline.h"
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
 /*
@@ -42,7 +46,13 @@ SAME(MVOD_STAGE_COUNT, 5);
 #undef SAME
 
 /*
- * One allocation holds the struct, both encoding buffers and both channel names, so the
+ * The four messages: each type on its own channel, the v2 types (pose2_t, status2_t: every v1
+ * field, then new ones) beside the v1 ones, on the v1 channel's name + "2".
+ */
+enum msg { POSE, STATUS, POSE2, STATUS2, MSGS };
+
+/*
+ * One allocation holds the struct, the encoding buffers and the channel names, so the
  * per-frame publish path touches no allocator (the generated *_publish mallocs per call).
  * Messages go out through one seam, send(): lcm_publish, mvod's own file:// log writer, or a
  * test's function.
@@ -54,30 +64,29 @@ struct mvod_ipc {
 	bool owns_lcm;
 	char *log_url, *log_path;  /* file://PATH?mode=w: opened by mvod_ipc_open_log, owned */
 	struct mvod_lcm_log *log;
-	uint8_t *pose_buf, *status_buf;
-	int pose_len, status_len;
-	char *pose_channel, *status_channel;
+	uint8_t *buf[MSGS];
+	int len[MSGS];
+	char *channel[MSGS];
 	char storage[];
 };
 
 /* The encoded sizes do not depend on field values: these types hold no arrays of variable length. */
-static int pose_encoded_size(void)
+static void encoded_sizes(int len[MSGS])
 {
-	const mvod_pose_t msg = {0};
-	return mvod_pose_t_encoded_size(&msg);
+	len[POSE] = mvod_pose_t_encoded_size(&(mvod_pose_t){0});
+	len[STATUS] = mvod_status_t_encoded_size(&(mvod_status_t){0});
+	len[POSE2] = mvod_pose2_t_encoded_size(&(mvod_pose2_t){0});
+	len[STATUS2] = mvod_status2_t_encoded_size(&(mvod_status2_t){0});
 }
 
-static int status_encoded_size(void)
-{
-	const mvod_status_t msg = {0};
-	return mvod_status_t_encoded_size(&msg);
-}
-
-/* Checked here so a bad configured name fails at startup, not on every publish. */
+/*
+ * Checked here so a bad configured name fails at startup, not on every publish; the v2
+ * channel's name is one character longer.
+ */
 static bool channel_valid(const char *channel)
 {
 	size_t len = strlen(channel);
-	return len > 0 && len <= LCM_MAX_CHANNEL_NAME_LENGTH;
+	return len > 0 && len <= MVOD_MAX_CHANNEL_LENGTH;
 }
 
 /* LCM reports failure as -1 without a cause; a send that fails is an I/O error. */
@@ -103,35 +112,42 @@ int mvod_ipc_create_on(lcm_t *lcm, const char *pose_channel, const char *status_
 	return ret;
 }
 
+/* Lays out the buffers and the channel names (v1, then v1 + "2") in ipc->storage. */
+static void layout(struct mvod_ipc *ipc, const int len[MSGS], const char *const names[2])
+{
+	char *p = ipc->storage;
+	for (int m = 0; m < MSGS; m++) {
+		ipc->len[m] = len[m];
+		ipc->buf[m] = (uint8_t *)p;
+		p += len[m];
+	}
+	for (int m = 0; m < MSGS; m++) {
+		ipc->channel[m] = p;
+		p += sprintf(p, "%s%s", names[m % 2], m >= POSE2 ? "2" : "") + 1;
+	}
+}
+
 int mvod_ipc_create_with(mvod_ipc_send_fn send, void *ctx, const char *pose_channel,
 			 const char *status_channel, struct mvod_ipc **out)
 {
 	if (!send || !out)
 		return -EINVAL;
-	if (!pose_channel)
-		pose_channel = MVOD_DEFAULT_POSE_CHANNEL;
-	if (!status_channel)
-		status_channel = MVOD_DEFAULT_STATUS_CHANNEL;
-	if (!channel_valid(pose_channel) || !channel_valid(status_channel))
+	const char *names[2] = {pose_channel ? pose_channel : MVOD_DEFAULT_POSE_CHANNEL,
+				status_channel ? status_channel : MVOD_DEFAULT_STATUS_CHANNEL};
+	if (!channel_valid(names[0]) || !channel_valid(names[1]))
 		return -EINVAL;
 
-	int pose_len = pose_encoded_size(), status_len = status_encoded_size();
-	size_t pc_len = strlen(pose_channel) + 1, sc_len = strlen(status_channel) + 1;
-	struct mvod_ipc *ipc = calloc(1, sizeof(*ipc) + (size_t)pose_len + (size_t)status_len +
-						 pc_len + sc_len);
+	int len[MSGS];
+	encoded_sizes(len);
+	size_t size = sizeof(struct mvod_ipc) + 2 * (strlen(names[0]) + strlen(names[1])) + 6;
+	for (int m = 0; m < MSGS; m++)
+		size += (size_t)len[m];
+	struct mvod_ipc *ipc = calloc(1, size);
 	if (!ipc)
 		return -ENOMEM;
-
 	ipc->send = send;
 	ipc->send_ctx = ctx;
-	ipc->pose_len = pose_len;
-	ipc->status_len = status_len;
-	ipc->pose_buf = (uint8_t *)ipc->storage;
-	ipc->status_buf = ipc->pose_buf + pose_len;
-	ipc->pose_channel = (char *)ipc->status_buf + status_len;
-	ipc->status_channel = ipc->pose_channel + pc_len;
-	memcpy(ipc->pose_channel, pose_channel, pc_len);
-	memcpy(ipc->status_channel, status_channel, sc_len);
+	layout(ipc, len, names);
 	*out = ipc;
 	return 0;
 }
@@ -188,13 +204,14 @@ int mvod_ipc_open_log(struct mvod_ipc *ipc, char *err, size_t errlen)
 {
 	if (!ipc->log_path || ipc->log)
 		return 0;
-	size_t chan = strlen(ipc->pose_channel) > strlen(ipc->status_channel)
-			      ? strlen(ipc->pose_channel)
-			      : strlen(ipc->status_channel);
-	size_t msg = (size_t)(ipc->pose_len > ipc->status_len ? ipc->pose_len : ipc->status_len);
+	size_t event = 0; /* the longest channel name and message */
+	for (int m = 0; m < MSGS; m++) {
+		size_t e = strlen(ipc->channel[m]) + (size_t)ipc->len[m];
+		event = e > event ? e : event;
+	}
 	char what[4200];
 	snprintf(what, sizeof(what), "--lcm-url %s: LCM log", ipc->log_url);
-	return mvod_lcm_log_open(what, ipc->log_path, chan + msg, &ipc->log, err, errlen);
+	return mvod_lcm_log_open(what, ipc->log_path, event, &ipc->log, err, errlen);
 }
 
 int mvod_ipc_finish(struct mvod_ipc *ipc)
@@ -223,18 +240,60 @@ void mvod_ipc_destroy(struct mvod_ipc *ipc)
 	free(ipc);
 }
 
-static int publish(const struct mvod_ipc *ipc, const char *channel, const uint8_t *buf, int len)
+/*
+ * A v2 type begins with every field of its v1 type, in order: the common initial sequence of
+ * a union (C11 6.5.2.3), so each v1 message is read out of its v2 one and the other way round,
+ * with no field listed twice. The asserts hold the layouts to that.
+ */
+union pose_msg {
+	mvod_pose_t v1;
+	mvod_pose2_t v2;
+};
+union status_msg {
+	mvod_status_t v1;
+	mvod_status2_t v2;
+};
+_Static_assert(offsetof(mvod_pose_t, inliers) == offsetof(mvod_pose2_t, inliers),
+	       "mvod.pose2_t does not begin with mvod.pose_t's fields");
+_Static_assert(offsetof(mvod_status_t, faults) == offsetof(mvod_status2_t, faults),
+	       "mvod.status2_t does not begin with mvod.status_t's fields");
+
+void mvod_pose_msg_upgrade(const mvod_pose_t *v1, mvod_pose2_t *v2)
 {
-	if (len < 0)
-		return -EMSGSIZE;
-	return ipc->send(ipc->send_ctx, channel, buf, (size_t)len);
+	union pose_msg u = {.v2 = {0}};
+	u.v1 = *v1;
+	*v2 = u.v2;
 }
 
+void mvod_status_msg_upgrade(const mvod_status_t *v1, mvod_status2_t *v2)
+{
+	union status_msg u = {.v2 = {0}};
+	u.v1 = *v1;
+	*v2 = u.v2;
+}
+
+/* Encodes msg of kind m into its buffer and sends it; the size was fixed at create. */
+static int publish(const struct mvod_ipc *ipc, enum msg m, const void *msg)
+{
+	int len = -1;
+	switch (m) {
+	case POSE: len = mvod_pose_t_encode(ipc->buf[m], 0, ipc->len[m], msg); break;
+	case STATUS: len = mvod_status_t_encode(ipc->buf[m], 0, ipc->len[m], msg); break;
+	case POSE2: len = mvod_pose2_t_encode(ipc->buf[m], 0, ipc->len[m], msg); break;
+	case STATUS2: len = mvod_status2_t_encode(ipc->buf[m], 0, ipc->len[m], msg); break;
+	case MSGS: break;
+	}
+	if (len < 0)
+		return -EMSGSIZE;
+	return ipc->send(ipc->send_ctx, ipc->channel[m], ipc->buf[m], (size_t)len);
+}
+
+/* v2 first, then v1 (so a reader of both, as mvod view, knows from the first message). */
 int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 			  const struct mvod_vo_result *res)
 {
 	assert(ipc && res);
-	mvod_pose_t msg = {
+	union pose_msg u = {.v2 = {
 		.utime = utime,
 		.frame = frame,
 		.state = (int8_t)res->state,
@@ -243,17 +302,19 @@ int mvod_ipc_publish_pose(struct mvod_ipc *ipc, int64_t utime, int64_t frame,
 		.features = res->features,
 		.matches = res->matches,
 		.inliers = res->inliers,
-	};
-	memcpy(msg.position, res->pose.t, sizeof(msg.position));
-	mvod_rot_to_quat(res->pose.R, msg.orientation);
-
-	int len = mvod_pose_t_encode(ipc->pose_buf, 0, ipc->pose_len, &msg);
-	return publish(ipc, ipc->pose_channel, ipc->pose_buf, len);
+		.keyframe = res->keyframe,
+		.quality = (float)res->quality,
+	}};
+	memcpy(u.v2.position, res->pose.t, sizeof(u.v2.position));
+	mvod_rot_to_quat(res->pose.R, u.v2.orientation);
+	int ret = publish(ipc, POSE2, &u.v2);
+	int ret1 = publish(ipc, POSE, &u.v1);
+	return ret ? ret : ret1;
 }
 
-void mvod_status_to_msg(const struct mvod_status *st, mvod_status_t *msg)
+void mvod_status_to_msg(const struct mvod_status *st, mvod_status2_t *msg)
 {
-	*msg = (mvod_status_t){
+	*msg = (mvod_status2_t){
 		.utime = st->utime,
 		.state = (int8_t)st->state,
 		.fps = (float)st->fps,
@@ -270,10 +331,15 @@ void mvod_status_to_msg(const struct mvod_status *st, mvod_status_t *msg)
 		.rss_kb = st->rss_kb,
 		.uptime_s = st->uptime_s,
 		.faults = st->faults,
+		.map_points = st->map_points,
+		.keyframes = st->keyframes,
+		.scale = st->scale,
+		.scale_confidence = (float)st->scale_confidence,
+		.latency_ms = (float)st->latency_ms,
 	};
 }
 
-void mvod_status_from_msg(const mvod_status_t *msg, struct mvod_status *st)
+void mvod_status_from_msg(const mvod_status2_t *msg, struct mvod_status *st)
 {
 	*st = (struct mvod_status){
 		.utime = msg->utime,
@@ -289,14 +355,20 @@ void mvod_status_from_msg(const mvod_status_t *msg, struct mvod_status *st)
 		.uptime_s = msg->uptime_s,
 		.state = (enum mvod_run_state)msg->state,
 		.faults = msg->faults,
+		.map_points = msg->map_points,
+		.keyframes = msg->keyframes,
+		.scale = msg->scale,
+		.scale_confidence = msg->scale_confidence,
+		.latency_ms = msg->latency_ms,
 	};
 }
 
 int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st)
 {
 	assert(ipc && st);
-	mvod_status_t msg;
-	mvod_status_to_msg(st, &msg);
-	int len = mvod_status_t_encode(ipc->status_buf, 0, ipc->status_len, &msg);
-	return publish(ipc, ipc->status_channel, ipc->status_buf, len);
+	union status_msg u;
+	mvod_status_to_msg(st, &u.v2);
+	int ret = publish(ipc, STATUS2, &u.v2);
+	int ret1 = publish(ipc, STATUS, &u.v1);
+	return ret ? ret : ret1;
 }

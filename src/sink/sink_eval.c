@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mvod/log.h"
 #include "mvod/pipeline.h"
 
 /* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
@@ -27,7 +28,12 @@ static int eval_frame(void *ctx, const struct mvod_frame_out *f)
 		e->gt_last = f->frame->index;
 		e->gt_first = e->gt_frames++ ? e->gt_first : f->frame->index;
 		if (e->prev_had_gt) {
-			mvod_rpe_add(&e->rpe, &e->prev_est, est, &e->prev_gt, gt);
+			struct mvod_frame_err fe = mvod_rpe_add(&e->rpe, &e->prev_est, est,
+								&e->prev_gt, gt);
+			if (e->n_pairs < e->max_pairs)
+				e->pairs[e->n_pairs++] = fe;
+			else
+				e->lost_pairs++;
 			e->path_len_m += mvod_vec3_dist(gt->t, e->prev_gt.t);
 		}
 		e->prev_gt = *gt;
@@ -36,6 +42,20 @@ static int eval_frame(void *ctx, const struct mvod_frame_out *f)
 	e->prev_est = *est;
 	e->have_prev = true;
 	return 0;
+}
+
+/* err_avg in metres: the free-scale estimate scaled by the alignment's sc, as mvod bench. */
+static void rescale_err(struct mvod_sink_eval *e, struct mvod_run_summary *s, double sc)
+{
+	if (e->lost_pairs) {
+		LOG(WARN, "err_avg is in the estimate's own units, not metres: %d more frames "
+			  "matched a ground-truth pose than the %d kept for it (twice the ground "
+			  "truth's poses)", e->lost_pairs, e->max_pairs);
+		return;
+	}
+	mvod_rpe_rescale_err(&e->rpe, e->pairs, e->n_pairs, sc);
+	s->rpe.err_avg = e->rpe.err_avg;
+	s->rpe.err_max = e->rpe.err_max;
 }
 
 /* A ground truth whose poses all lie within this of its first is static (metres). */
@@ -74,6 +94,7 @@ static int eval_finish(void *ctx, struct mvod_run_summary *s)
 	s->ate_scale = sc;
 	if (!e->sim3)
 		return 0;
+	rescale_err(e, s, sc);
 	mvod_sim3_apply(R, t, sc, e->est_path.xyz, e->est_path.n);
 	mvod_mat3_mul(R, e->heading, e->heading);
 	e->aligned = true;
@@ -86,6 +107,7 @@ static void eval_destroy(void *ctx)
 	mvod_path_fini(&e->est_path);
 	mvod_path_fini(&e->gt_path);
 	mvod_path_fini(&e->est_at_gt);
+	free(e->pairs);
 	free(e);
 }
 
@@ -96,15 +118,21 @@ static const struct mvod_sink_ops eval_ops = {
 	.destroy = eval_destroy,
 };
 
-int mvod_sink_eval_create(bool sim3, struct mvod_sink *out)
+int mvod_sink_eval_create(bool sim3, int gt_poses, struct mvod_sink *out)
 {
 	struct mvod_sink_eval *e = calloc(1, sizeof(*e));
 	if (!e)
 		return -ENOMEM;
 	e->sim3 = sim3;
 	e->gt_first = e->gt_last = -1;
-	if (mvod_path_init(&e->est_path, PATH_POINTS) || mvod_path_init(&e->gt_path, PATH_POINTS) ||
-	    mvod_path_init(&e->est_at_gt, PATH_POINTS)) {
+	/*
+	 * A TUM pose serves the frames within 5 ms of it: at most 2 of a camera at up to 100 fps,
+	 * so twice the poses is room for every pair.
+	 */
+	e->max_pairs = sim3 ? 2 * gt_poses : 0;
+	e->pairs = e->max_pairs ? calloc((size_t)e->max_pairs, sizeof(*e->pairs)) : NULL;
+	if ((e->max_pairs && !e->pairs) || mvod_path_init(&e->est_path, PATH_POINTS) ||
+	    mvod_path_init(&e->gt_path, PATH_POINTS) || mvod_path_init(&e->est_at_gt, PATH_POINTS)) {
 		eval_destroy(e);
 		return -ENOMEM;
 	}

@@ -16,7 +16,9 @@ struct lcm_sink {
 static int lcm_frame(void *ctx, const struct mvod_frame_out *f)
 {
 	struct lcm_sink *s = ctx;
-	if (mvod_ipc_publish_pose(s->ipc, f->frame->utime, f->frame->index, f->res) &&
+	struct mvod_vo_result res = *f->res; /* with the pose in --frame's axes */
+	res.pose = *f->pose;
+	if (mvod_ipc_publish_pose(s->ipc, f->frame->utime, f->frame->index, &res) &&
 	    mvod_faults_set(s->faults, MVOD_STATUS_T_FAULT_PUBLISH))
 		LOG(ERROR, "frame %lld: publishing the pose over LCM failed (the transport or log "
 			   "file refused it); mvod carries on, and says no more of it (a file:// log "

@@ -21,7 +21,7 @@ static int traj_frame(void *ctx, const struct mvod_frame_out *f)
 	const int32_t bit = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE;
 	if (s->faults->bits & bit)
 		return 0;
-	int ret = mvod_traj_writer_add(s->w, f->frame->utime / 1e6, &f->res->pose);
+	int ret = mvod_traj_writer_add(s->w, f->frame->utime / 1e6, f->pose);
 	if (ret && mvod_faults_set(s->faults, bit))
 		LOG(ERROR, "trajectory %s: %s at frame %lld; it is incomplete from there on "
 			   "(poses still go out over LCM) and mvod will exit with status 1",

@@ -6,7 +6,9 @@
 #include <string.h>
 
 #include "mvod/plot.h"
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
 /* A second of poses is enough for a steady rate and short enough to follow a change. */
@@ -48,8 +50,9 @@ static void note_state(struct mvod_view *v, int state)
 		v->last_state = v->state;
 }
 
-void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t recv_us)
+void mvod_view_add_pose2(struct mvod_view *v, const mvod_pose2_t *msg, int64_t recv_us)
 {
+	v->v2 = true;
 	v->poses++;
 	memcpy(v->pose.t, msg->position, sizeof(v->pose.t));
 	mvod_quat_to_rot(msg->orientation, v->pose.R);
@@ -66,16 +69,39 @@ void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t rec
 	v->features = msg->features;
 	v->matches = msg->matches;
 	v->inliers = msg->inliers;
+	v->quality = msg->quality;
 	mvod_path_add(&v->path, v->pose.t);
 	v->last_pose_us = recv_us;
 	update_rate(v, recv_us);
 }
 
-void mvod_view_add_status(struct mvod_view *v, const mvod_status_t *msg)
+void mvod_view_add_status2(struct mvod_view *v, const mvod_status2_t *msg)
 {
+	v->v2 = true;
 	v->statuses++;
 	note_state(v, msg->state);
 	mvod_status_from_msg(msg, &v->status);
+}
+
+/* A v1 message counts only until the first v2 one: mvod publishes the v2 first, then the v1. */
+void mvod_view_add_pose(struct mvod_view *v, const mvod_pose_t *msg, int64_t recv_us)
+{
+	if (v->v2)
+		return;
+	mvod_pose2_t m;
+	mvod_pose_msg_upgrade(msg, &m);
+	mvod_view_add_pose2(v, &m, recv_us);
+	v->v2 = false;
+}
+
+void mvod_view_add_status(struct mvod_view *v, const mvod_status_t *msg)
+{
+	if (v->v2)
+		return;
+	mvod_status2_t m;
+	mvod_status_msg_upgrade(msg, &m);
+	mvod_view_add_status2(v, &m);
+	v->v2 = false;
 }
 
 double mvod_view_yaw_deg(const struct mvod_view *v)
@@ -120,6 +146,8 @@ static void pose_rows(const struct mvod_view *v, int64_t now_us, struct mvod_vie
 	row(rows, max, n, "scale from", "%s",
 	    mvod_scale_source_name((enum mvod_scale_source)v->scale_source));
 	row(rows, max, n, "feat/match/inl", "%d / %d / %d", v->features, v->matches, v->inliers);
+	if (v->v2)
+		row(rows, max, n, "quality", "%.2f", v->quality);
 	double idle_s = (double)(now_us - v->last_pose_us) / 1e6;
 	if (idle_s * 1e6 >= STALE_US)
 		row(rows, max, n, "poses received", "none for %.0f s", idle_s);
@@ -149,6 +177,19 @@ static void fault_names(int32_t faults, char *buf, size_t len)
 						 names[i].name);
 }
 
+/* What only mvod.status2_t carries. */
+static void v2_status_rows(const struct mvod_status *s, struct mvod_view_row *rows, int max,
+			   int *n)
+{
+	row(rows, max, n, "map points/keyfr.", "%d / %d", s->map_points, s->keyframes);
+	if (s->scale > 0)
+		row(rows, max, n, "scale", "%.3g m/unit (conf. %.2f)", s->scale,
+		    s->scale_confidence);
+	else
+		row(rows, max, n, "scale", "unknown (free)");
+	row(rows, max, n, "latency", "%.1f ms", s->latency_ms);
+}
+
 static void status_rows(const struct mvod_view *v, struct mvod_view_row *rows, int max, int *n)
 {
 	const struct mvod_status *s = &v->status;
@@ -161,6 +202,8 @@ static void status_rows(const struct mvod_view *v, struct mvod_view_row *rows, i
 	row(rows, max, n, "ms capt/prep/pose", "%.1f / %.1f / %.1f",
 	    s->stage_ms[MVOD_STAGE_CAPTURE], s->stage_ms[MVOD_STAGE_PREPROCESS],
 	    s->stage_ms[MVOD_STAGE_POSE]);
+	if (v->v2)
+		v2_status_rows(s, rows, max, n);
 	row(rows, max, n, "RSS", "%.1f MiB", (double)s->rss_kb / 1024.0);
 	row(rows, max, n, "uptime", "%lld:%02lld:%02lld", up / 3600, up / 60 % 60, up % 60);
 	char faults[96];

@@ -72,6 +72,20 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 	};
 }
 
+bool mvod_vo_tracked(const struct mvod_vo_result *res)
+{
+	return res->state == MVOD_STATE_TRACKING &&
+	       (res->status == MVOD_FRAME_MOTION || res->status == MVOD_FRAME_ROTATION);
+}
+
+double mvod_vo_quality(const struct mvod_vo_params *p, const struct mvod_vo_result *res)
+{
+	if (!mvod_vo_tracked(res))
+		return 0;
+	double q = res->inliers / (double)(MVOD_QUALITY_INLIERS * p->min_inliers);
+	return q < 1 ? q : 1;
+}
+
 static int slot_init(struct frame_slot *k, int cap, int desc_bytes)
 {
 	k->f.cap = cap;

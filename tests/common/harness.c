@@ -326,8 +326,31 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 struct log_sink {
 	void (*on_pose)(const mvod_pose_t *msg, void *ctx);
 	void (*on_status)(const mvod_status_t *msg, void *ctx);
+	void (*on_pose2)(const mvod_pose2_t *msg, void *ctx);
+	void (*on_status2)(const mvod_status2_t *msg, void *ctx);
 	void *ctx;
 };
+
+/* The v2 messages, on the v1 channels' names + "2"; counted apart, and decoded alike. */
+static void read_event2(const lcm_eventlog_event_t *e, struct log_contents *c,
+			const struct log_sink *s)
+{
+	if (strcmp(e->channel, MVOD_DEFAULT_POSE_CHANNEL "2") == 0) {
+		mvod_pose2_t p;
+		bool ok = mvod_pose2_t_decode(e->data, 0, e->datalen, &p) > 0;
+		c->bad += !ok;
+		if (ok && s->on_pose2)
+			s->on_pose2(&p, s->ctx);
+		c->poses2++;
+	} else if (strcmp(e->channel, MVOD_DEFAULT_STATUS_CHANNEL "2") == 0) {
+		mvod_status2_t st;
+		bool ok = mvod_status2_t_decode(e->data, 0, e->datalen, &st) > 0;
+		c->bad += !ok;
+		if (ok && s->on_status2)
+			s->on_status2(&st, s->ctx);
+		c->statuses2++;
+	}
+}
 
 static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
 		       const struct log_sink *s)
@@ -347,6 +370,8 @@ static void read_event(const lcm_eventlog_event_t *e, struct log_contents *c,
 		if (ok && s->on_status)
 			s->on_status(&c->last_status, s->ctx);
 		c->statuses++;
+	} else {
+		read_event2(e, c, s);
 	}
 }
 
@@ -368,7 +393,7 @@ static void read_log(const char *path, struct log_contents *c, const struct log_
 void harness_read_log(const char *path, struct log_contents *c,
 		      void (*on_status)(const mvod_status_t *msg, void *ctx), void *ctx)
 {
-	read_log(path, c, &(struct log_sink){NULL, on_status, ctx});
+	read_log(path, c, &(struct log_sink){.on_status = on_status, .ctx = ctx});
 }
 
 /* The first max messages of one type (size bytes each), and how many there were. */
@@ -395,10 +420,22 @@ static void keep_status(const mvod_status_t *msg, void *ctx)
 	keep(ctx, msg);
 }
 
-static int list_messages(const char *log, bool poses, void *out, size_t size, int max)
+static void keep_pose2(const mvod_pose2_t *msg, void *ctx)
+{
+	keep(ctx, msg);
+}
+
+static void keep_status2(const mvod_status2_t *msg, void *ctx)
+{
+	keep(ctx, msg);
+}
+
+/* kind: 0 pose_t, 1 status_t, 2 pose2_t, 3 status2_t. */
+static int list_messages(const char *log, int kind, void *out, size_t size, int max)
 {
 	struct msg_list l = {out, size, max, 0};
-	struct log_sink s = {poses ? keep_pose : NULL, poses ? NULL : keep_status, &l};
+	struct log_sink s = {kind == 0 ? keep_pose : NULL, kind == 1 ? keep_status : NULL,
+			     kind == 2 ? keep_pose2 : NULL, kind == 3 ? keep_status2 : NULL, &l};
 	struct log_contents c;
 	read_log(log, &c, &s);
 	if (c.bad)
@@ -408,12 +445,22 @@ static int list_messages(const char *log, bool poses, void *out, size_t size, in
 
 int harness_poses(const char *log, mvod_pose_t *out, int max)
 {
-	return list_messages(log, true, out, sizeof(*out), max);
+	return list_messages(log, 0, out, sizeof(*out), max);
 }
 
 int harness_statuses(const char *log, mvod_status_t *out, int max)
 {
-	return list_messages(log, false, out, sizeof(*out), max);
+	return list_messages(log, 1, out, sizeof(*out), max);
+}
+
+int harness_poses2(const char *log, mvod_pose2_t *out, int max)
+{
+	return list_messages(log, 2, out, sizeof(*out), max);
+}
+
+int harness_statuses2(const char *log, mvod_status2_t *out, int max)
+{
+	return list_messages(log, 3, out, sizeof(*out), max);
 }
 
 void harness_blacken(const char *images, int i, int w, int h)

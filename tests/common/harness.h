@@ -7,7 +7,9 @@
 
 #include "mvod/eval.h"
 #include "mvod/traj.h"
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
 /* Exit code meson reads as "skipped". */
@@ -83,6 +85,7 @@ void harness_compare(const char *est_path, const char *gt_path, int sim3, struct
 /* What a file:// LCM log written by mvod holds, on the default channels. */
 struct log_contents {
 	int poses, statuses;
+	int poses2, statuses2; /* mvod.pose2_t, status2_t on MVOD_POSE2, MVOD_STATUS2 */
 	int bad;            /* events that do not decode */
 	int gaps;           /* poses not numbered one after the last (frames skipped before) */
 	int64_t last_frame; /* of the last pose, -1 without one */
@@ -97,5 +100,8 @@ void harness_read_log(const char *path, struct log_contents *c,
  */
 int harness_poses(const char *log, mvod_pose_t *out, int max);
 int harness_statuses(const char *log, mvod_status_t *out, int max);
+/* The same for mvod.pose2_t and mvod.status2_t. */
+int harness_poses2(const char *log, mvod_pose2_t *out, int max);
+int harness_statuses2(const char *log, mvod_status2_t *out, int max);
 
 #endif

@@ -253,6 +253,8 @@ static void test_bad_usage(void **state)
 		/* mvod run's LCM flags would be ignored: refused, by name. */
 		{"--lcm-url=memq://", "--lcm-url applies only to mvod run"},
 		{"--no-lcm", "--no-lcm applies only to mvod run"},
+		/* ... and the output frame: the bench evaluates the camera's poses. */
+		{"--frame=ros", "--frame applies only to mvod run"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		struct run_result r;

@@ -99,7 +99,8 @@ static void test_channel_too_long(void **state)
 	memset(name, 'C', 70);
 	name[70] = '\0';
 	expect(calib, 2, "--pose-channel CCCC", "--pose-channel", name, NULL);
-	expect(calib, 2, "expected at most 63 characters (LCM's limit for a channel name), not 70",
+	expect(calib, 2, "expected at most 62 characters (LCM's limit for a "
+	       "channel name, less the 2 of its v2 channel), not 70",
 	       "--pose-channel", name, NULL);
 }
 

@@ -60,21 +60,27 @@ static void run_mvod(void)
 		fail_msg("mvod failed: %s", r.err);
 }
 
-/* Status messages with every fault bit, one bit newer than the bindings, and unknown states. */
-static const mvod_status_t fault_statuses[] = {
-	{.utime = 1, .frames = 1, .state = MVOD_POSE_T_STATE_TRACKING, .faults = 0},
+/*
+ * Status messages with every fault bit, one bit newer than the bindings, and unknown states;
+ * the v2 type's new fields with values a float and a %.6g print exactly.
+ */
+static const mvod_status2_t fault_statuses[] = {
+	{.utime = 1, .frames = 1, .state = MVOD_POSE_T_STATE_TRACKING, .faults = 0,
+	 .map_points = 1200, .keyframes = 7, .scale = 0.25, .latency_ms = 4.5},
 	{.utime = 2, .frames = 2, .state = MVOD_POSE_T_STATE_LOST, .faults = 15},
 	{.utime = 3, .frames = 3, .state = MVOD_POSE_T_STATE_SOURCE_DOWN, .faults = 4 | 256},
 	{.utime = 4, .frames = 4, .state = 9, .faults = INT32_MIN},
 	{.utime = 5, .frames = 5, .state = MVOD_POSE_T_STATE_STOPPING, .faults = 8},
 };
+#define V2_ZERO " map_points=0 keyframes=0 scale=0 latency_ms=0.000\n"
 static const char fault_lines[] =
-	"status utime=1 frames=1 state=TRACKING faults=none\n"
+	"status utime=1 frames=1 state=TRACKING faults=none map_points=1200 keyframes=7 "
+	"scale=0.25 latency_ms=4.500\n"
 	"status utime=2 frames=2 state=LOST "
-	"faults=TRAJECTORY_WRITE|FRAME_UNREADABLE|SOURCE_BROKEN|PUBLISH\n"
-	"status utime=3 frames=3 state=SOURCE_DOWN faults=SOURCE_BROKEN|0x100\n"
-	"status utime=4 frames=4 state=9 faults=0x80000000\n"
-	"status utime=5 frames=5 state=STOPPING faults=PUBLISH\n";
+	"faults=TRAJECTORY_WRITE|FRAME_UNREADABLE|SOURCE_BROKEN|PUBLISH" V2_ZERO
+	"status utime=3 frames=3 state=SOURCE_DOWN faults=SOURCE_BROKEN|0x100" V2_ZERO
+	"status utime=4 frames=4 state=9 faults=0x80000000" V2_ZERO
+	"status utime=5 frames=5 state=STOPPING faults=PUBLISH" V2_ZERO;
 
 static void write_fault_log(void)
 {
@@ -84,7 +90,7 @@ static void write_fault_log(void)
 	lcm_t *lcm = lcm_create(url);
 	assert_non_null(lcm);
 	for (size_t i = 0; i < sizeof(fault_statuses) / sizeof(fault_statuses[0]); i++)
-		assert_int_equal(mvod_status_t_publish(lcm, "MVOD_STATUS", &fault_statuses[i]), 0);
+		assert_int_equal(mvod_status2_t_publish(lcm, "MVOD_STATUS2", &fault_statuses[i]), 0);
 	lcm_destroy(lcm);
 }
 
@@ -129,34 +135,43 @@ static void test_fingerprints(void **state)
 	harness_read_file(path, text, sizeof(text));
 	lcm_eventlog_t *ev = lcm_eventlog_create(log_path, "r");
 	assert_non_null(ev);
-	int checked[2] = {0, 0};
+	/* Each channel's type, by the channel's name. */
+	static const char *const channels[] = {"MVOD_STATUS", "MVOD_POSE", "MVOD_STATUS2",
+					       "MVOD_POSE2"};
+	static const char *const types[] = {"status_t", "pose_t", "status2_t", "pose2_t"};
+	int checked[4] = {0, 0, 0, 0};
 	lcm_eventlog_event_t *e;
 	while ((e = lcm_eventlog_read_next_event(ev))) {
-		int is_pose = strcmp(e->channel, "MVOD_POSE") == 0;
+		int k = 0;
+		while (k < 4 && strcmp(e->channel, channels[k]) != 0)
+			k++;
+		assert_true(k < 4);
 		char line[80];
 		const unsigned char *d = e->data;
 		uint64_t fp = 0;
 		for (int i = 0; i < 8 && e->datalen >= 8; i++)
 			fp = fp << 8 | d[i];
-		snprintf(line, sizeof(line), "\nmvod.%s 0x%016llx\n", is_pose ? "pose_t" : "status_t",
-			 (unsigned long long)fp);
+		snprintf(line, sizeof(line), "\nmvod.%s 0x%016llx\n", types[k], (unsigned long long)fp);
 		if (!strstr(text, line))
 			fail_msg("%s (a message on %s) is not in %s:\n%s", line + 1, e->channel, path,
 				 text);
-		checked[is_pose]++;
+		checked[k]++;
 		lcm_eventlog_free_event(e);
 	}
 	lcm_eventlog_destroy(ev);
 	assert_int_equal(checked[1], FRAMES);
+	assert_int_equal(checked[3], FRAMES);
 	assert_true(checked[0] >= 1);
+	assert_int_equal(checked[2], checked[0]);
 }
 
 /* The lines a subscriber prints for the messages of the log mvod wrote. */
 static void expected_lines(char *buf, size_t len)
 {
-	static mvod_pose_t p[MAX_MSGS];
-	static mvod_status_t s[MAX_MSGS];
-	int np = harness_poses(log_path, p, MAX_MSGS), ns = harness_statuses(log_path, s, MAX_MSGS);
+	static mvod_pose2_t p[MAX_MSGS];
+	static mvod_status2_t s[MAX_MSGS];
+	int np = harness_poses2(log_path, p, MAX_MSGS);
+	int ns = harness_statuses2(log_path, s, MAX_MSGS);
 	assert_int_equal(np, FRAMES);
 	assert_true(ns >= 1 && ns <= MAX_MSGS);
 	static const char *const states[] = {"STARTING", "INITIALIZING", "TRACKING", "LOST",
@@ -166,20 +181,24 @@ static void expected_lines(char *buf, size_t len)
 		assert_in_range(p[i].state, 0, 5);
 		n += (size_t)snprintf(buf + n, len - n,
 				      "pose frame=%lld utime=%lld position=%.6f,%.6f,%.6f "
-				      "orientation=%.6f,%.6f,%.6f,%.6f state=%s\n",
+				      "orientation=%.6f,%.6f,%.6f,%.6f state=%s quality=%.3f "
+				      "keyframe=%d\n",
 				      (long long)p[i].frame, (long long)p[i].utime,
 				      p[i].position[0], p[i].position[1], p[i].position[2],
 				      p[i].orientation[0], p[i].orientation[1],
-				      p[i].orientation[2], p[i].orientation[3], states[p[i].state]);
+				      p[i].orientation[2], p[i].orientation[3], states[p[i].state],
+				      p[i].quality, p[i].keyframe);
 	}
 	/* mvod sets no fault on a clean run. */
 	for (int i = 0; i < ns && n < len; i++) {
 		assert_int_equal(s[i].faults, 0);
 		assert_in_range(s[i].state, 0, 5);
 		n += (size_t)snprintf(buf + n, len - n,
-				      "status utime=%lld frames=%lld state=%s faults=none\n",
+				      "status utime=%lld frames=%lld state=%s faults=none "
+				      "map_points=%d keyframes=%d scale=%.6g latency_ms=%.3f\n",
 				      (long long)s[i].utime, (long long)s[i].frames,
-				      states[s[i].state]);
+				      states[s[i].state], s[i].map_points, s[i].keyframes,
+				      s[i].scale, s[i].latency_ms);
 	}
 	assert_true(n < len);
 }

@@ -34,6 +34,7 @@ static const char every_key[] =
 	"uri = file:clip.mkv?realtime=1\n"
 	"max-frames = 1234\n"
 	"gt = gt.tum\n"
+	"clock = realtime\n"
 	"[calibration]\n"
 	"file = calib.json\n"
 	"[vo]\n"
@@ -59,6 +60,8 @@ static const char every_key[] =
 	"trajectory = out.kitti\n"
 	"format = tum\n"
 	"plot = out.png\n"
+	"frame = ros\n"
+	"camera-to-body = 0.1,0,0.2,-0.5,0.5,-0.5,0.5\n"
 	"[log]\n"
 	"level = debug\n"
 	"quiet = yes\n";
@@ -90,6 +93,9 @@ static void assert_every_key(const struct mvod_config *c)
 	/* Given explicitly, so the .kitti name does not decide it. */
 	assert_int_equal(c->run.traj_format, MVOD_TRAJ_TUM);
 	assert_string_equal(c->run.plot, "out.png");
+	assert_int_equal(c->run.clock, MVOD_CLOCK_REALTIME);
+	assert_int_equal(c->run.axes, MVOD_AXES_ROS);
+	assert_string_equal(c->run.camera_to_body, "0.1,0,0.2,-0.5,0.5,-0.5,0.5");
 	assert_int_equal(c->log_level, MVOD_LOG_DEBUG);
 	assert_true(c->quiet);
 }

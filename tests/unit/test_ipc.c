@@ -16,7 +16,9 @@
 #include "ipc/lcm_log.h"
 #include "mvod/ipc.h"
 #include "mvod/pipeline.h"
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
 #define N_POSES 10
@@ -27,6 +29,10 @@ struct received {
 	int n_poses;
 	mvod_status_t status;
 	int n_status;
+	mvod_pose2_t poses2[N_POSES];
+	int n_poses2;
+	mvod_status2_t status2;
+	int n_status2;
 };
 
 struct fixture {
@@ -49,6 +55,23 @@ static void on_status(const lcm_recv_buf_t *rbuf, const char *channel, const mvo
 	struct received *got = user;
 	got->status = *msg;
 	got->n_status++;
+}
+
+static void on_pose2(const lcm_recv_buf_t *rbuf, const char *channel, const mvod_pose2_t *msg,
+		     void *user)
+{
+	struct received *got = user;
+	if (got->n_poses2 < N_POSES)
+		got->poses2[got->n_poses2] = *msg;
+	got->n_poses2++;
+}
+
+static void on_status2(const lcm_recv_buf_t *rbuf, const char *channel,
+		       const mvod_status2_t *msg, void *user)
+{
+	struct received *got = user;
+	got->status2 = *msg;
+	got->n_status2++;
 }
 
 static int setup(void **state)
@@ -100,6 +123,8 @@ static void make_result(int i, struct mvod_vo_result *res, double q[4])
 	res->features = 1000 + i;
 	res->matches = 500 + i;
 	res->inliers = 200 + i;
+	res->keyframe = i % 3 == 1;
+	res->quality = 0.125 * (i % 9); /* exact in a float */
 }
 
 static int64_t utime_of(int i)
@@ -127,6 +152,19 @@ static void assert_pose_equal(const mvod_pose_t *m, int i)
 	assert_int_equal(m->inliers, res.inliers);
 }
 
+/* The v2 message of frame i: the v1 fields as its v1 twin (checked the same), then the new. */
+static void assert_pose2_equal(const mvod_pose2_t *m2, int i)
+{
+	mvod_pose_t m = {.utime = m2->utime, .frame = m2->frame, .state = m2->state,
+			 .scale_source = m2->scale_source, .frame_status = m2->frame_status,
+			 .features = m2->features, .matches = m2->matches, .inliers = m2->inliers};
+	memcpy(m.position, m2->position, sizeof(m.position));
+	memcpy(m.orientation, m2->orientation, sizeof(m.orientation));
+	assert_pose_equal(&m, i);
+	assert_int_equal(m2->keyframe, i % 3 == 1);
+	assert_true(m2->quality == 0.125f * (float)(i % 9));
+}
+
 static void publish_poses(struct mvod_ipc *ipc, int n)
 {
 	for (int i = 0; i < n; i++) {
@@ -144,18 +182,25 @@ static void test_pose_roundtrip(void **state)
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
 	mvod_pose_t_subscription_t *sub =
 		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, on_pose, &f->got);
+	mvod_pose2_t_subscription_t *sub2 =
+		mvod_pose2_t_subscribe(f->lcm, "MVOD_POSE2", on_pose2, &f->got);
 	assert_non_null(sub);
+	assert_non_null(sub2);
 
 	publish_poses(ipc, N_POSES);
-	for (int i = 0; i < N_POSES; i++)
+	for (int i = 0; i < 2 * N_POSES; i++)
 		assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
 
 	assert_int_equal(f->got.n_poses, N_POSES);
-	for (int i = 0; i < N_POSES; i++)
+	assert_int_equal(f->got.n_poses2, N_POSES);
+	for (int i = 0; i < N_POSES; i++) {
 		assert_pose_equal(&f->got.poses[i], i);
+		assert_pose2_equal(&f->got.poses2[i], i);
+	}
 	assert_int_equal(lcm_handle_timeout(f->lcm, 10), 0);
 
 	mvod_pose_t_unsubscribe(f->lcm, sub);
+	mvod_pose2_t_unsubscribe(f->lcm, sub2);
 	mvod_ipc_destroy(ipc);
 }
 
@@ -172,14 +217,36 @@ static void test_status_roundtrip(void **state)
 		.uptime_s = 3600.125,
 		.state = MVOD_RUN_LOST,
 		.faults = MVOD_STATUS_T_FAULT_TRAJECTORY_WRITE | MVOD_STATUS_T_FAULT_PUBLISH,
+		.map_points = 4321, .keyframes = 17, .scale = 0.0625, .scale_confidence = 0.75,
+		.latency_ms = 12.5,
 	};
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
 	mvod_status_t_subscription_t *sub =
 		mvod_status_t_subscribe(f->lcm, MVOD_DEFAULT_STATUS_CHANNEL, on_status, &f->got);
+	mvod_status2_t_subscription_t *sub2 =
+		mvod_status2_t_subscribe(f->lcm, "MVOD_STATUS2", on_status2, &f->got);
 	assert_non_null(sub);
+	assert_non_null(sub2);
 
 	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);
 	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+
+	/* v2: the new fields, and the old ones read back through the one conversion. */
+	const mvod_status2_t *m2 = &f->got.status2;
+	assert_int_equal(f->got.n_status2, 1);
+	assert_int_equal(m2->map_points, 4321);
+	assert_int_equal(m2->keyframes, 17);
+	assert_true(m2->scale == 0.0625);
+	assert_true(m2->scale_confidence == 0.75f);
+	assert_true(m2->latency_ms == 12.5f);
+	struct mvod_status back;
+	mvod_status_from_msg(m2, &back);
+	assert_int_equal(back.frames, st.frames);
+	assert_int_equal(back.faults, st.faults);
+	assert_int_equal(back.state, st.state);
+	assert_true(back.latency_ms == 12.5 && back.scale == 0.0625 && back.map_points == 4321);
+	mvod_status2_t_unsubscribe(f->lcm, sub2);
 
 	const mvod_status_t *m = &f->got.status;
 	assert_int_equal(f->got.n_status, 1);
@@ -238,6 +305,7 @@ static void test_custom_channels(void **state)
 	make_result(0, &res, q);
 	assert_int_equal(mvod_ipc_publish_pose(ipc, utime_of(0), 0, &res), 0);
 	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);
+	/* memq:// drops messages nobody subscribed to: the v2 ones here. */
 	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
 	assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
 	assert_int_equal(lcm_handle_timeout(f->lcm, 10), 0);
@@ -265,7 +333,10 @@ static void test_bad_channels(void **state)
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, longname, &ipc), -EINVAL);
 	assert_int_equal(mvod_ipc_create_on(NULL, NULL, NULL, &ipc), -EINVAL);
 	assert_null(ipc);
+	/* LCM's longest name is refused too: its v2 channel would be one longer. */
 	longname[LCM_MAX_CHANNEL_NAME_LENGTH] = '\0';
+	assert_int_equal(mvod_ipc_create_on(f->lcm, longname, NULL, &ipc), -EINVAL);
+	longname[MVOD_MAX_CHANNEL_LENGTH] = '\0';
 	assert_int_equal(mvod_ipc_create_on(f->lcm, longname, NULL, &ipc), 0);
 	mvod_ipc_destroy(ipc);
 	mvod_ipc_destroy(NULL);
@@ -381,6 +452,7 @@ static void test_file_log_write_error(void **state)
 struct sent {
 	int calls, ret;
 	char channel[64];
+	char order[128]; /* the channels, in order, each followed by a space */
 };
 
 static int fake_send(void *ctx, const char *channel, const void *buf, size_t len)
@@ -388,6 +460,8 @@ static int fake_send(void *ctx, const char *channel, const void *buf, size_t len
 	struct sent *s = ctx;
 	s->calls++;
 	snprintf(s->channel, sizeof(s->channel), "%s", channel);
+	size_t n = strlen(s->order);
+	snprintf(s->order + n, sizeof(s->order) - n, "%s ", channel);
 	return len > 0 ? s->ret : -EINVAL;
 }
 
@@ -406,7 +480,9 @@ static void test_send_seam(void **state)
 	s.ret = 0;
 	assert_int_equal(mvod_ipc_publish_status(ipc, &st), 0);
 	assert_string_equal(s.channel, "S");
-	assert_int_equal(s.calls, 2);
+	/* Each publish sends v2, then v1 (mvod view takes v1 only until a v2 came). */
+	assert_int_equal(s.calls, 4);
+	assert_string_equal(s.order, "P2 P S2 S ");
 	assert_int_equal(mvod_ipc_finish(ipc), 0);
 	mvod_ipc_destroy(ipc);
 }
@@ -440,6 +516,37 @@ static void test_log_urls(void **state)
 	}
 }
 
+/* A v1 message (an old log) as v2: every field kept, the new ones 0. */
+static void test_upgrade(void **state)
+{
+	(void)state;
+	mvod_pose_t p = {.utime = 7, .frame = 3, .position = {1, 2, 3},
+			 .orientation = {0.5, 0.5, 0.5, 0.5}, .state = 2, .scale_source = 4,
+			 .frame_status = 6, .features = 9, .matches = 8, .inliers = 7};
+	mvod_pose2_t p2;
+	memset(&p2, 0x55, sizeof(p2));
+	mvod_pose_msg_upgrade(&p, &p2);
+	assert_int_equal(p2.utime, 7);
+	assert_int_equal(p2.frame, 3);
+	assert_true(p2.position[2] == 3 && p2.orientation[3] == 0.5);
+	assert_int_equal(p2.state, 2);
+	assert_int_equal(p2.frame_status, 6);
+	assert_int_equal(p2.inliers, 7);
+	assert_int_equal(p2.keyframe, 0);
+	assert_true(p2.quality == 0);
+
+	mvod_status_t st = {.utime = 5, .frames = 11, .faults = 8, .state = 3};
+	mvod_status2_t st2;
+	memset(&st2, 0x55, sizeof(st2));
+	mvod_status_msg_upgrade(&st, &st2);
+	assert_int_equal(st2.utime, 5);
+	assert_int_equal(st2.frames, 11);
+	assert_int_equal(st2.faults, 8);
+	assert_int_equal(st2.state, 3);
+	assert_int_equal(st2.map_points, 0);
+	assert_true(st2.scale == 0 && st2.latency_ms == 0);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -454,6 +561,7 @@ int main(void)
 		cmocka_unit_test(test_file_log_write_error),
 		cmocka_unit_test(test_send_seam),
 		cmocka_unit_test(test_log_urls),
+		cmocka_unit_test(test_upgrade),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -31,6 +31,7 @@
 #include "capture/v4l2.h"
 #include "mvod/capture.h"
 #include "mvod/pipeline.h"
+#include "util/clock.h"
 #include "mvod_status_t.h"
 
 #define W 64
@@ -728,6 +729,9 @@ static void run_opts(struct mvod_run_opts *o, volatile sig_atomic_t *stop, struc
 	lcm_destroy(lcm);
 }
 
+/* The --clock of run_fake's runs (monotonic unless a test sets it). */
+static enum mvod_clock fake_clock;
+
 /* run_opts on the W x H device; the calibration records calib_focus unless it is NaN. */
 static void run_fake_focus(volatile sig_atomic_t *stop, struct statuses *got,
 			   struct mvod_run_summary *sum, double calib_focus)
@@ -744,6 +748,7 @@ static void run_fake_focus(volatile sig_atomic_t *stop, struct statuses *got,
 	mvod_run_opts_default(&o);
 	o.source = "v4l2:" DEV "?width=64&height=48&format=GREY";
 	o.calib = calib;
+	o.clock = fake_clock;
 	run_opts(&o, stop, got, sum);
 	unlink(calib);
 }
@@ -977,9 +982,49 @@ static void test_reconnect_continues_pose(void **state)
 	mvod_traj_free(&gt);
 }
 
+/* A run of 3 frames stamped 100 s + seq ms by the driver, with clock; its last status. */
+static void clock_run(enum mvod_clock clock, mvod_status_t *last)
+{
+	reset(V4L2_PIX_FMT_GREY);
+	for (int i = 0; i < 3; i++)
+		add_frame(i, (uint32_t)i);
+	static volatile sig_atomic_t stop;
+	stop = 0;
+	F.done = &stop;
+	fake_clock = clock;
+	struct statuses got = {0};
+	struct mvod_run_summary sum;
+	run_fake(&stop, &got, &sum);
+	fake_clock = MVOD_CLOCK_MONOTONIC;
+	assert_true(got.n > 0);
+	*last = got.last;
+}
+
+/*
+ * --clock: monotonic leaves a frame's utime as the driver stamped the buffer; realtime moves
+ * it to the same instant in Unix time, by the offset between the two clocks during the run.
+ */
+static void test_clock(void **state)
+{
+	(void)state;
+	const int64_t stamped = 100 * 1000000LL; /* frame seq s: stamped + s ms */
+	mvod_status_t last;
+	clock_run(MVOD_CLOCK_MONOTONIC, &last);
+	assert_in_range(last.utime, stamped, stamped + 2000);
+	int64_t before = mvod_realtime_offset_us();
+	clock_run(MVOD_CLOCK_REALTIME, &last);
+	int64_t after = mvod_realtime_offset_us();
+	/*
+	 * The offset is sampled per frame, between before and after; only NTP's slew (at most
+	 * 500 ppm) moves it, so 50 ms holds for runs up to 100 s.
+	 */
+	assert_in_range(last.utime, stamped + before - 50000, stamped + 2000 + after + 50000);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_clock),
 		cmocka_unit_test(test_formats),
 		cmocka_unit_test(test_read_into),
 		cmocka_unit_test(test_focus_against_calibration),

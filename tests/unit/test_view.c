@@ -12,7 +12,9 @@
 
 #include "mvod/plot.h"
 #include "mvod/view.h"
+#include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
 static mvod_pose_t pose_at(double z, double yaw_deg)
@@ -272,9 +274,53 @@ static void test_plot_draw_paints_every_pixel(void **state)
 	}
 }
 
+/*
+ * A log of an mvod that published only v1 is shown (without the v2 rows); once a v2 message
+ * came, the v1 twins mvod publishes beside them count no more, and the panel shows quality,
+ * map points and keyframes, scale and latency.
+ */
+static void test_v2_and_v1(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	struct mvod_view_row rows[MVOD_VIEW_MAX_ROWS];
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	mvod_pose_t p1 = pose_at(1, 0);
+	mvod_status_t s1 = {.state = MVOD_POSE_T_STATE_TRACKING, .frames = 1};
+	mvod_view_add_pose(&v, &p1, 0);
+	mvod_view_add_status(&v, &s1);
+	assert_int_equal(v.poses, 1);
+	assert_int_equal(v.statuses, 1);
+	int n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	for (int i = 0; i < n; i++)
+		assert_true(strcmp(rows[i].label, "quality") && strcmp(rows[i].label, "latency"));
+
+	mvod_pose2_t p2 = {.position = {0, 0, 2}, .orientation = {1, 0, 0, 0},
+			   .state = MVOD_POSE_T_STATE_TRACKING, .quality = 0.75f, .keyframe = 1};
+	mvod_status2_t s2 = {.state = MVOD_POSE_T_STATE_TRACKING, .frames = 2, .map_points = 900,
+			     .keyframes = 12, .scale = 0.5, .scale_confidence = 0.25f,
+			     .latency_ms = 7.5f};
+	mvod_view_add_pose2(&v, &p2, 0);
+	mvod_view_add_status2(&v, &s2);
+	mvod_pose_t late = pose_at(5, 0);
+	mvod_view_add_pose(&v, &late, 0);
+	mvod_view_add_status(&v, &s1);
+	assert_int_equal(v.poses, 2);
+	assert_int_equal(v.statuses, 2);
+	assert_true(v.pose.t[2] == 2);
+	n = mvod_view_rows(&v, 0, rows, MVOD_VIEW_MAX_ROWS);
+	assert_string_equal(value_of(rows, n, "quality"), "0.75");
+	assert_string_equal(value_of(rows, n, "map points/keyfr."), "900 / 12");
+	assert_string_equal(value_of(rows, n, "scale"), "0.5 m/unit (conf. 0.25)");
+	assert_string_equal(value_of(rows, n, "latency"), "7.5 ms");
+	assert_string_equal(value_of(rows, n, "frames"), "2");
+	mvod_view_fini(&v);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_v2_and_v1),
 		cmocka_unit_test(test_yaw),
 		cmocka_unit_test(test_rate_and_staleness),
 		cmocka_unit_test(test_memory_fixed),

@@ -374,9 +374,42 @@ static void test_seam_refuses_bad_features(void **state)
 	mvod_vo_destroy(vo);
 }
 
+/*
+ * Quality: inliers against MVOD_QUALITY_INLIERS x min_inliers, clamped to [0, 1], and 0 for
+ * every pose that is not tracked: held frames, and rotations before tracking began.
+ */
+static void test_quality(void **state)
+{
+	(void)state;
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	const double full = MVOD_QUALITY_INLIERS * p.min_inliers;
+	struct mvod_vo_result r = {.state = MVOD_STATE_TRACKING, .status = MVOD_FRAME_MOTION};
+	r.inliers = (int)full / 2;
+	assert_float_equal(mvod_vo_quality(&p, &r), 0.5, 1e-12);
+	r.inliers = (int)full * 3;
+	assert_float_equal(mvod_vo_quality(&p, &r), 1.0, 0);
+	r.status = MVOD_FRAME_ROTATION;
+	r.inliers = p.min_inliers;
+	assert_float_equal(mvod_vo_quality(&p, &r), p.min_inliers / full, 1e-12);
+	assert_true(mvod_vo_tracked(&r));
+	r.state = MVOD_STATE_INITIALIZING; /* a static camera's rotation frames */
+	assert_false(mvod_vo_tracked(&r));
+	assert_float_equal(mvod_vo_quality(&p, &r), 0, 0);
+	const enum mvod_frame_status held[] = {MVOD_FRAME_FIRST, MVOD_FRAME_FEW_FEATURES,
+					       MVOD_FRAME_FEW_MATCHES, MVOD_FRAME_RANSAC_FAILED,
+					       MVOD_FRAME_FEW_INLIERS};
+	r = (struct mvod_vo_result){.state = MVOD_STATE_TRACKING, .inliers = 500};
+	for (size_t i = 0; i < sizeof(held) / sizeof(held[0]); i++) {
+		r.status = held[i];
+		assert_float_equal(mvod_vo_quality(&p, &r), 0, 0);
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_quality),
 		cmocka_unit_test(test_first_frame),
 		cmocka_unit_test(test_few_features_make_no_reference),
 		cmocka_unit_test(test_free_scale_unit_step),
