@@ -40,7 +40,7 @@ extern "C" int mvod_video_open(const char *path, struct mvod_video **out)
 
 extern "C" void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info)
 {
-	*info = {0, 0, 0.0, -1, false, NAN, false};
+	*info = {0, 0, 0.0, -1, false, NAN, false, false};
 	(void)mvod_guarded([&] {
 		info->width = (int)v->cap.get(cv::CAP_PROP_FRAME_WIDTH);
 		info->height = (int)v->cap.get(cv::CAP_PROP_FRAME_HEIGHT);
