@@ -82,6 +82,16 @@ static void test_install_and_verify(void **state)
 	harness_read_file(path, unit, sizeof(unit));
 	assert_non_null(strstr(unit, "mvod run --config /etc/mvod/%i.conf\n"));
 	assert_non_null(strstr(unit, "\nRestartPreventExitStatus=2 3\n"));
+	/*
+	 * With a JDK and LCM's lcm.jar (liblcm-java) the types' jar for lcm-spy is built and
+	 * installed, holding both classes.
+	 */
+	if (access("/usr/bin/javac", X_OK) == 0 && access("/usr/share/java/lcm.jar", R_OK) == 0) {
+		snprintf(cmd, sizeof(cmd), "jar tf \"$(find %s -path '*/share/mvod/java/mvod-lcmtypes.jar')\" "
+			 "| grep -c '^mvod/\\(pose\\|status\\)_t.class$' | grep -qx 2", root);
+		if (system(cmd) != 0)
+			fail_msg("share/mvod/java/mvod-lcmtypes.jar is missing or lacks the classes");
+	}
 	/* The example config, under whichever prefix the build was set up with. */
 	snprintf(cmd, sizeof(cmd), "find %s -path '*/share/mvod/mvod.conf.example' | grep -q .",
 		 root);

@@ -231,7 +231,7 @@ static void test_failed_start_keeps_outputs(void **state)
 	expect_fail(&r, 1, "nonexistent-typo");
 	mvod(&r, "--source", images, "--calib", "/nonexistent-calib.json", "--trajectory", traj,
 	     "--lcm-url", url, NULL);
-	expect_fail(&r, 1, "nonexistent-calib.json");
+	expect_fail(&r, 3, "nonexistent-calib.json"); /* 3: the calibration */
 	mvod(&r, "--source", images, "--calib", calib, "--gt", bad_gt, "--scale", "gt",
 	     "--trajectory", traj, "--lcm-url", url, NULL);
 	expect_fail(&r, 1, "frame 0");
