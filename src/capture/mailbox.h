@@ -18,6 +18,7 @@
 struct mvod_letter {
 	struct mvod_frame frame; /* frame.img.data points into this letter's own buffer */
 	int epoch;               /* whatever the producer tags the frame with */
+	int read;                /* 0, or -EINVAL: one bad frame, which frame.index and .bad name */
 };
 
 struct mvod_mailbox {
