@@ -3,7 +3,7 @@
  * letters never handed to both sides, close and cancel), then the capture thread on images:
  * and kitti: sequences written at test time, longer than the queue, with bad frames among
  * them: every frame comes out once, in order, with its own pixels and time, and each bad one
- * in its place with its reason. The file: source is run end to end in integration/pipelined.
+ * in its place with its reason. The file: source is run end to end in integration/pipelined_run.
  */
 #include <errno.h>
 #include <setjmp.h>
