@@ -197,11 +197,7 @@ static int init(struct mvod_capture *c, struct mvod_source *src, const char *uri
 	int ret = c->lossless ? mvod_queue_init(&c->q, bytes) : mvod_mailbox_init(&c->mb, bytes);
 	if (ret)
 		return ret;
-	pthread_condattr_t attr;
-	pthread_condattr_init(&attr);
-	pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
-	pthread_cond_init(&c->wake, &attr);
-	pthread_condattr_destroy(&attr);
+	mvod_cond_init_monotonic(&c->wake);
 	pthread_mutex_init(&c->lock, NULL);
 	c->last = -1;
 	ret = -pthread_create(&c->thread, NULL, run, c);

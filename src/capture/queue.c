@@ -1,38 +1,25 @@
 #include "capture/queue.h"
 
 #include <errno.h>
-#include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 int mvod_queue_init(struct mvod_queue *q, size_t bytes)
 {
 	memset(q, 0, sizeof(*q));
-	for (int i = 0; i < MVOD_QUEUE_DEPTH; i++) {
-		q->letters[i].frame.img.data = malloc(bytes);
-		if (!q->letters[i].frame.img.data) {
-			mvod_queue_fini(q);
-			return -ENOMEM;
-		}
-	}
-	/* Waits are measured on the clock that does not jump with the wall clock. */
-	pthread_condattr_t attr;
-	pthread_condattr_init(&attr);
-	pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
-	pthread_cond_init(&q->changed, &attr);
-	pthread_condattr_destroy(&attr);
+	int ret = mvod_letters_alloc(q->letters, MVOD_QUEUE_DEPTH, bytes);
+	if (ret)
+		return ret;
+	mvod_cond_init_monotonic(&q->changed);
 	pthread_mutex_init(&q->lock, NULL);
+	q->made = true;
 	return 0;
 }
 
 void mvod_queue_fini(struct mvod_queue *q)
 {
-	/* init allocates in order and stops at the first failure: the last buffer is there only
-	 * when init went through, lock and condition included. */
-	bool made = q->letters[MVOD_QUEUE_DEPTH - 1].frame.img.data != NULL;
-	for (int i = 0; i < MVOD_QUEUE_DEPTH; i++)
-		free(q->letters[i].frame.img.data);
-	if (made) {
+	mvod_letters_free(q->letters, MVOD_QUEUE_DEPTH);
+	if (q->made) {
 		pthread_cond_destroy(&q->changed);
 		pthread_mutex_destroy(&q->lock);
 	}

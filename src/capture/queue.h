@@ -31,6 +31,7 @@ struct mvod_queue {
 	bool held;              /* the consumer holds the letter before head */
 	int closed;             /* the producer will post nothing more: why, a negative errno */
 	bool cancelled;         /* the consumer is gone: the producer must not wait */
+	bool made;              /* lock and condition initialised (fini destroys them) */
 };
 
 /* MVOD_QUEUE_DEPTH buffers of bytes each. 0 or -ENOMEM. */

@@ -135,15 +135,22 @@ static void check_frame(const struct mvod_frame *f, int i)
 			assert_int_equal(f->img.data[y * f->img.stride + x], level(i));
 }
 
-/* Every frame of uri once, in order, then -ENODATA; bad ones as -EINVAL with their reason. */
-static void drain(const char *uri)
+/* The capture thread on uri ("scheme:" and dir). */
+static struct mvod_capture *start(const char *scheme, const char *dir)
 {
+	char uri[512], err[512] = "";
+	snprintf(uri, sizeof(uri), "%s:%s", scheme, dir);
 	struct mvod_source *src = NULL;
-	char err[512] = "";
 	if (mvod_source_open(uri, &src, err, sizeof(err)))
 		fail_msg("%s: %s", uri, err);
 	struct mvod_capture *cap = NULL;
 	assert_int_equal(mvod_capture_start(src, uri, &cap), 0);
+	return cap;
+}
+
+/* Every frame once, in order, then -ENODATA; bad ones as -EINVAL with their reason. */
+static void drain(struct mvod_capture *cap)
+{
 	struct mvod_frame f;
 	int epoch, ret;
 	for (int i = 0; i < FRAMES; i++) {
@@ -173,9 +180,7 @@ static void test_images_in_order(void **state)
 	const char *dir = harness_tmp_path("images");
 	assert_int_equal(mkdir(dir, 0755), 0);
 	write_sequence(dir);
-	char uri[512];
-	snprintf(uri, sizeof(uri), "images:%s", dir);
-	drain(uri);
+	drain(start("images", dir));
 }
 
 static void test_kitti_in_order(void **state)
@@ -194,9 +199,7 @@ static void test_kitti_in_order(void **state)
 	assert_int_equal(rename(path, moved), 0);
 	snprintf(path, sizeof(path), "%s/calib.txt", seq);
 	harness_write_file(path, "P0: 20 0 8 0 0 20 4 0 0 0 1 0\n");
-	char uri[512];
-	snprintf(uri, sizeof(uri), "kitti:%s", seq);
-	drain(uri);
+	drain(start("kitti", seq));
 }
 
 /* Stopped with the queue full and the thread waiting for room: it ends, nothing leaks. */
@@ -206,12 +209,7 @@ static void test_stop_while_full(void **state)
 	const char *dir = harness_tmp_path("full");
 	assert_int_equal(mkdir(dir, 0755), 0);
 	write_sequence(dir);
-	char uri[512], err[512] = "";
-	snprintf(uri, sizeof(uri), "images:%s", dir);
-	struct mvod_source *src = NULL;
-	assert_int_equal(mvod_source_open(uri, &src, err, sizeof(err)), 0);
-	struct mvod_capture *cap = NULL;
-	assert_int_equal(mvod_capture_start(src, uri, &cap), 0);
+	struct mvod_capture *cap = start("images", dir);
 	struct mvod_frame f;
 	int epoch, ret;
 	while ((ret = mvod_capture_next(cap, 1000, &f, &epoch)) == -EAGAIN)
