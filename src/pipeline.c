@@ -537,28 +537,42 @@ static int read_failed(struct run *r, int ret)
 	return ret;
 }
 
+static int start_capture(struct run *r)
+{
+	int ret = mvod_capture_start(r->src, r->o->source, &r->cap);
+	if (ret)
+		LOG(ERROR, "%s: cannot start the capture thread: %s", r->o->source, strerror(-ret));
+	else
+		r->src = NULL; /* the capture thread's now */
+	return ret;
+}
+
+/*
+ * Every frame of a source that is not live, in order, decoded on the capture thread while the
+ * one before is processed. The capture stage's time is how long the loop waited for a frame.
+ */
 static int loop(struct run *r, volatile sig_atomic_t *stop)
 {
-	while (!stopped(r, stop)) {
+	int ret = start_capture(r);
+	while (!ret && !stopped(r, stop)) {
 		between_frames(r);
 		struct mvod_frame f;
+		int epoch;
 		double t0 = mvod_now_s();
-		int ret = mvod_source_read(r->src, &f);
+		ret = mvod_capture_next(r->cap, LIVE_WAIT_MS, &f, &epoch);
 		if (ret == -ENODATA)
 			return 0;
-		if (ret == -EAGAIN)
-			continue;
-		if (ret == -EINVAL) {
-			skip_unreadable(r, &f);
+		if (ret == -EAGAIN || ret == -EINVAL) {
+			if (ret == -EINVAL)
+				skip_unreadable(r, &f);
+			ret = 0;
 			continue;
 		}
 		if (ret)
 			return read_failed(r, ret);
 		ret = process_frame(r, &f, (mvod_now_s() - t0) * 1e3);
-		if (ret)
-			return ret;
 	}
-	return 0;
+	return ret;
 }
 
 /* While the capture thread reopens a source that went away, status says so every second. */
@@ -598,12 +612,9 @@ static void restart_vo(struct run *r, const struct mvod_frame *f, int epoch)
  */
 static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 {
-	int ret = mvod_capture_start(r->src, r->o->source, &r->cap);
-	if (ret) {
-		LOG(ERROR, "%s: cannot start the capture thread: %s", r->o->source, strerror(-ret));
+	int ret = start_capture(r);
+	if (ret)
 		return ret;
-	}
-	r->src = NULL; /* the capture thread's now */
 	r->sum->live = true;
 	while (!stopped(r, stop)) {
 		between_frames(r);

@@ -127,20 +127,25 @@ extern const struct mvod_source_ops *const mvod_source_backends[];
 int mvod_capture_list_cameras(FILE *out);
 
 /*
- * A live source read on its own thread. The newest frame waits in a single-slot mailbox of
- * preallocated buffers; a frame that a newer one replaces before it was taken is dropped (it
- * leaves a gap in the frame indices the consumer sees). A source whose device is gone
- * (-ENODEV: a camera unplugged) is closed, reported once, and reopened from its URI with
- * backoff, 0.5 s doubling to 8 s; frame indices go on from where they were.
+ * A source read on its own thread, so that decoding overlaps processing on another core.
+ * Live: the newest frame waits in a single-slot mailbox of preallocated buffers; a frame that
+ * a newer one replaces before it was taken is dropped (it leaves a gap in the frame indices
+ * the consumer sees). A source whose device is gone (-ENODEV: a camera unplugged) is closed,
+ * reported once, and reopened from its URI with backoff, 0.5 s doubling to 8 s; frame indices
+ * go on from where they were. Not live (files, images, datasets): every frame, bad ones
+ * included, waits in a bounded queue of preallocated buffers, in order; the thread waits for
+ * room, and never drops one.
  */
 struct mvod_capture;
 
-/* On success owns src (open, live) and reads it; uri reopens it after a failure. */
+/* On success owns src (open) and reads it; uri reopens a live one after a failure. */
 int mvod_capture_start(struct mvod_source *src, const char *uri, struct mvod_capture **out);
 /*
- * The newest frame, waiting up to timeout_ms. 0 with the frame (valid until the next call) and
- * *epoch, the number of times the source has come back before it; -EAGAIN when none came;
- * once every frame was taken, -ENODATA when the source ended or its -errno when it failed.
+ * The next frame (live: the newest), waiting up to timeout_ms. 0 with the frame (valid until
+ * the next call) and *epoch, the number of times the source has come back before it; -EINVAL
+ * for one bad frame of a source that is not live (frame->index and frame->bad say which and
+ * why; skip it); -EAGAIN when none came; once every frame was taken, -ENODATA when the source
+ * ended or its -errno when it failed.
  */
 int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame *frame,
 		      int *epoch);

@@ -1,7 +1,8 @@
 /*
- * The capture thread of live sources: read into the mailbox, reopen what went down. Cameras
- * convert their buffers straight into the mailbox's free letter; sources that decode into
- * buffers of their own (file:?realtime=1) are copied there once.
+ * The capture thread: a live source is read into the mailbox (the newest frame wins) and
+ * reopened when it goes down; any other source into the queue (every frame, in order), so
+ * that decoding overlaps processing. Cameras convert their buffers straight into the free
+ * letter; sources that decode into buffers of their own (files, images) are copied there once.
  */
 #include "mvod/capture.h"
 
@@ -12,6 +13,7 @@
 #include <string.h>
 
 #include "capture/mailbox.h"
+#include "capture/queue.h"
 #include "mvod/log.h"
 
 #define BACKOFF_FIRST_MS 500
@@ -21,7 +23,9 @@ struct mvod_capture {
 	struct mvod_source *src;      /* NULL while down; the capture thread's alone once started */
 	char *uri;
 	struct mvod_source_info info; /* of the first open: a reopened source must match it */
+	bool lossless;                /* not live: every frame goes through q, none through mb */
 	struct mvod_mailbox mb;
+	struct mvod_queue q;
 	pthread_t thread;
 	pthread_mutex_t lock;         /* guards stop; wake interrupts the backoff */
 	pthread_cond_t wake;
@@ -54,6 +58,20 @@ static bool sleep_unless_stopped(struct mvod_capture *c, int ms)
 	return s;
 }
 
+/* The letter to fill next: NULL when the consumer is stopping. */
+static struct mvod_letter *back(struct mvod_capture *c)
+{
+	return c->lossless ? mvod_queue_back(&c->q) : mvod_mailbox_back(&c->mb);
+}
+
+static void post(struct mvod_capture *c)
+{
+	if (c->lossless)
+		mvod_queue_post(&c->q);
+	else
+		mvod_mailbox_post(&c->mb);
+}
+
 /* Posts f, read into letter l (or, from a source with buffers of its own, copied there). */
 static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct mvod_frame *f)
 {
@@ -69,8 +87,28 @@ static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct 
 	l->frame.delivered_us = f->delivered_us;
 	l->frame.index = c->base + f->index;
 	l->epoch = c->epoch;
+	l->read = 0;
 	c->last = l->frame.index;
-	mvod_mailbox_post(&c->mb);
+	post(c);
+}
+
+/*
+ * A frame that could not be decoded at its size: a live source's is logged once and counted
+ * as dropped; any other source's goes through the queue in its place, for the consumer to
+ * skip and count by its reason.
+ */
+static void bad_frame(struct mvod_capture *c, struct mvod_letter *l, const struct mvod_frame *f)
+{
+	if (c->lossless) {
+		l->frame = (struct mvod_frame){.img = l->frame.img, .utime = f->utime,
+					       .index = f->index, .bad = f->bad};
+		l->read = -EINVAL;
+		post(c);
+		return;
+	}
+	if (!atomic_exchange(&c->saw_bad, true))
+		LOG(WARN, "%s: skipping frames that cannot be decoded at their size (counted as "
+			  "dropped)", c->uri);
 }
 
 static void lose(struct mvod_capture *c)
@@ -117,7 +155,9 @@ static int step(struct mvod_capture *c)
 		reopen(c);
 		return -EAGAIN;
 	}
-	struct mvod_letter *l = mvod_mailbox_back(&c->mb);
+	struct mvod_letter *l = back(c);
+	if (!l)
+		return -ECANCELED;
 	const struct mvod_image into = {.w = c->info.width, .h = c->info.height,
 					.stride = c->info.width, .fmt = MVOD_PIX_GREY,
 					.data = l->frame.img.data};
@@ -125,9 +165,8 @@ static int step(struct mvod_capture *c)
 	int ret = mvod_source_read_into(c->src, &f, &into);
 	if (ret == 0)
 		deliver(c, l, &f);
-	if (ret == -EINVAL && !atomic_exchange(&c->saw_bad, true))
-		LOG(WARN, "%s: skipping frames that cannot be decoded at their size (counted as "
-			  "dropped)", c->uri);
+	if (ret == -EINVAL)
+		bad_frame(c, l, &f);
 	if (ret != -ENODEV)
 		return ret;
 	lose(c);
@@ -140,7 +179,11 @@ static void *run(void *arg)
 	int ret = 0;
 	while (!stopping(c) && (ret == 0 || ret == -EAGAIN || ret == -EINVAL))
 		ret = step(c);
-	mvod_mailbox_close(&c->mb, ret < 0 && ret != -EAGAIN && ret != -EINVAL ? ret : -ENODATA);
+	int reason = ret < 0 && ret != -EAGAIN && ret != -EINVAL ? ret : -ENODATA;
+	if (c->lossless)
+		mvod_queue_close(&c->q, reason);
+	else
+		mvod_mailbox_close(&c->mb, reason);
 	return NULL;
 }
 
@@ -150,14 +193,12 @@ static int init(struct mvod_capture *c, struct mvod_source *src, const char *uri
 	c->uri = strdup(uri);
 	if (!c->uri)
 		return -ENOMEM;
-	int ret = mvod_mailbox_init(&c->mb, (size_t)c->info.width * (size_t)c->info.height * 3);
+	c->lossless = !c->info.live;
+	size_t bytes = (size_t)c->info.width * (size_t)c->info.height * 3; /* grey or BGR */
+	int ret = c->lossless ? mvod_queue_init(&c->q, bytes) : mvod_mailbox_init(&c->mb, bytes);
 	if (ret)
 		return ret;
-	pthread_condattr_t attr;
-	pthread_condattr_init(&attr);
-	pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
-	pthread_cond_init(&c->wake, &attr);
-	pthread_condattr_destroy(&attr);
+	mvod_cond_init_monotonic(&c->wake);
 	pthread_mutex_init(&c->lock, NULL);
 	c->last = -1;
 	ret = -pthread_create(&c->thread, NULL, run, c);
@@ -165,6 +206,7 @@ static int init(struct mvod_capture *c, struct mvod_source *src, const char *uri
 		pthread_cond_destroy(&c->wake);
 		pthread_mutex_destroy(&c->lock);
 		mvod_mailbox_fini(&c->mb);
+		mvod_queue_fini(&c->q);
 	}
 	return ret;
 }
@@ -189,12 +231,13 @@ int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame 
 		      int *epoch)
 {
 	struct mvod_letter *l;
-	int ret = mvod_mailbox_take(&c->mb, timeout_ms, &l);
+	int ret = c->lossless ? mvod_queue_take(&c->q, timeout_ms, &l)
+			      : mvod_mailbox_take(&c->mb, timeout_ms, &l);
 	if (ret)
 		return ret;
 	*frame = l->frame;
 	*epoch = l->epoch;
-	return 0;
+	return l->read;
 }
 
 bool mvod_capture_down(struct mvod_capture *c)
@@ -215,11 +258,14 @@ void mvod_capture_stop(struct mvod_capture *c)
 	c->stop = true;
 	pthread_cond_signal(&c->wake);
 	pthread_mutex_unlock(&c->lock);
+	if (c->lossless) /* a capture thread waiting for a free letter must not wait for ever */
+		mvod_queue_cancel(&c->q);
 	pthread_join(c->thread, NULL);
 	pthread_cond_destroy(&c->wake);
 	pthread_mutex_destroy(&c->lock);
 	mvod_source_close(c->src);
 	mvod_mailbox_fini(&c->mb);
+	mvod_queue_fini(&c->q);
 	free(c->uri);
 	free(c);
 }

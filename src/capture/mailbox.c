@@ -5,22 +5,43 @@
 #include <string.h>
 #include <time.h>
 
-int mvod_mailbox_init(struct mvod_mailbox *mb, size_t bytes)
+void mvod_cond_init_monotonic(pthread_cond_t *cond)
 {
-	memset(mb, 0, sizeof(*mb));
-	for (int i = 0; i < 3; i++) {
-		mb->letters[i].frame.img.data = malloc(bytes);
-		if (!mb->letters[i].frame.img.data) {
-			mvod_mailbox_fini(mb);
-			return -ENOMEM;
-		}
-	}
 	/* Waits are measured on the clock that does not jump with the wall clock. */
 	pthread_condattr_t attr;
 	pthread_condattr_init(&attr);
 	pthread_condattr_setclock(&attr, CLOCK_MONOTONIC);
-	pthread_cond_init(&mb->posted, &attr);
+	pthread_cond_init(cond, &attr);
 	pthread_condattr_destroy(&attr);
+}
+
+int mvod_letters_alloc(struct mvod_letter *letters, int n, size_t bytes)
+{
+	for (int i = 0; i < n; i++) {
+		letters[i].frame.img.data = malloc(bytes);
+		if (!letters[i].frame.img.data) {
+			mvod_letters_free(letters, n);
+			return -ENOMEM;
+		}
+	}
+	return 0;
+}
+
+void mvod_letters_free(struct mvod_letter *letters, int n)
+{
+	for (int i = 0; i < n; i++) {
+		free(letters[i].frame.img.data);
+		letters[i].frame.img.data = NULL;
+	}
+}
+
+int mvod_mailbox_init(struct mvod_mailbox *mb, size_t bytes)
+{
+	memset(mb, 0, sizeof(*mb));
+	int ret = mvod_letters_alloc(mb->letters, 3, bytes);
+	if (ret)
+		return ret;
+	mvod_cond_init_monotonic(&mb->posted);
 	pthread_mutex_init(&mb->lock, NULL);
 	mb->back = &mb->letters[0];
 	mb->slot = &mb->letters[1];
@@ -30,8 +51,7 @@ int mvod_mailbox_init(struct mvod_mailbox *mb, size_t bytes)
 
 void mvod_mailbox_fini(struct mvod_mailbox *mb)
 {
-	for (int i = 0; i < 3; i++)
-		free(mb->letters[i].frame.img.data);
+	mvod_letters_free(mb->letters, 3);
 	if (mb->back) {
 		pthread_cond_destroy(&mb->posted);
 		pthread_mutex_destroy(&mb->lock);

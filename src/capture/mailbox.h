@@ -18,6 +18,7 @@
 struct mvod_letter {
 	struct mvod_frame frame; /* frame.img.data points into this letter's own buffer */
 	int epoch;               /* whatever the producer tags the frame with */
+	int read;                /* 0, or -EINVAL: one bad frame, which frame.index and .bad name */
 };
 
 struct mvod_mailbox {
@@ -56,6 +57,12 @@ int mvod_mailbox_take(struct mvod_mailbox *mb, int timeout_ms, struct mvod_lette
 int64_t mvod_mailbox_dropped(struct mvod_mailbox *mb);
 
 /* timeout_ms from now on CLOCK_MONOTONIC, the clock every wait in capture is measured on. */
+/* A condition whose timed waits are measured on that clock. */
+void mvod_cond_init_monotonic(pthread_cond_t *cond);
+/* n letters of bytes each: 0, or -ENOMEM with every buffer freed. */
+int mvod_letters_alloc(struct mvod_letter *letters, int n, size_t bytes);
+/* Frees the buffers of n letters (NULL ones too). */
+void mvod_letters_free(struct mvod_letter *letters, int n);
 struct timespec mvod_mailbox_deadline(int timeout_ms);
 
 #endif
