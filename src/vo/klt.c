@@ -195,10 +195,22 @@ static float harris(const struct mvod_image *g, int x, int y)
 	return a * b - c * c - 0.04f * (a + b) * (a + b);
 }
 
-static int by_score_desc(const void *pa, const void *pb)
+/*
+ * Strongest first, by Shell sort (Ciura's gaps) in place: glibc's qsort mallocs a buffer for
+ * arrays over 1 kB, which tests/integration/test_alloc.c caught (0.2 calls per frame).
+ */
+static void sort_by_score(struct corner *c, int n)
 {
-	const struct corner *a = pa, *b = pb;
-	return (a->score < b->score) - (a->score > b->score);
+	static const int gaps[] = {1750, 701, 301, 132, 57, 23, 10, 4, 1};
+	for (size_t g = 0; g < sizeof(gaps) / sizeof(gaps[0]); g++) {
+		for (int i = gaps[g]; i < n; i++) {
+			struct corner x = c[i];
+			int j = i;
+			for (; j >= gaps[g] && c[j - gaps[g]].score < x.score; j -= gaps[g])
+				c[j] = c[j - gaps[g]];
+			c[j] = x;
+		}
+	}
 }
 
 static int occ_index(const struct mvod_klt *k, float x, float y)
@@ -277,7 +289,7 @@ static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 		if (s > 0) /* not an edge or a flat patch */
 			k->corners[nc++] = (struct corner){x, y, s};
 	}
-	qsort(k->corners, (size_t)nc, sizeof(*k->corners), by_score_desc);
+	sort_by_score(k->corners, nc);
 	mark_tracks(k);
 	int cells = BUCKETS_X * BUCKETS_Y;
 	add_corners(k, nc, (k->p.max_tracks + cells - 1) / cells);
