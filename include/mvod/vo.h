@@ -52,6 +52,18 @@ enum mvod_robust_method {
 /* The estimators' names in enum order, NULL-terminated (the config file's choices). */
 extern const char *const mvod_robust_names[];
 
+/*
+ * How features reach the two-view estimator: detected and matched by descriptor in every frame
+ * (ORB, or SIFT with --detector), or FAST corners tracked frame to frame by pyramidal
+ * Lucas-Kanade (src/vo/klt.h), which needs no descriptors and no matching.
+ */
+enum mvod_frontend {
+	MVOD_FRONTEND_ORB = 0, /* the descriptor front end: the default */
+	MVOD_FRONTEND_KLT = 1,
+};
+/* The front ends' names in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_frontend_names[];
+
 /* Keypoint detector and descriptor. */
 enum mvod_detector {
 	MVOD_DETECTOR_ORB = 0,  /* binary 256-bit descriptors: fast, the default */
@@ -106,8 +118,10 @@ extern const char *const mvod_stage_names[MVOD_STAGE_COUNT];
 struct mvod_vo_params {
 	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
-	enum mvod_detector detector; /* ORB */
-	int max_features;       /* feature cap. 2000 */
+	enum mvod_frontend frontend; /* ORB */
+	enum mvod_detector detector; /* ORB; the descriptor front end's */
+	int max_features;       /* feature cap of the descriptor front end. 2000 */
+	int max_tracks;         /* track cap of the KLT front end. 500 */
 	enum mvod_matcher_kind matcher; /* BF */
 	double ratio;           /* Lowe's ratio test threshold (matchers with one); >= 1 = off. 0.8 */
 	int best_n;             /* BF_CROSS keeps this many closest mutual matches. 200 */

@@ -453,6 +453,12 @@ static void config_cells(const struct mvod_vo_params *p, struct row *r)
 	cell(r, C_RESIZE, "%g", p->resize);
 	cell(r, C_BLUR, "%.0f", p->blur_ksize);
 	cell(r, C_RATIO, "%g", mvod_matcher_uses_ratio(p->matcher) ? p->ratio : NAN);
+	if (p->frontend == MVOD_FRONTEND_KLT) { /* no descriptors, no matcher: the track cap */
+		strcpy(r->f[C_DETECTOR], "klt");
+		strcpy(r->f[C_MATCHER], "-");
+		strcpy(r->f[C_RATIO], "-");
+		cell(r, C_FEATURES, "%.0f", p->max_tracks);
+	}
 }
 
 static void fill_row(const struct mvod_run_opts *o, const struct mvod_run_summary *s,

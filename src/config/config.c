@@ -16,6 +16,7 @@
 _Static_assert(sizeof(enum mvod_scale_mode) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_robust_method) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_detector) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_frontend) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_matcher_kind) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_traj_format) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
@@ -43,9 +44,11 @@ const struct mvod_config_key mvod_config_keys[] = {
 	 .run_only = true},
 	OPTSTR("calibration", "file", "calib", run.calib),
 	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
+	CHOICE("vo", "frontend", "frontend", run.vo.frontend, mvod_frontend_names),
 	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
 	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names),
 	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000),
+	NUM("vo", "tracks", MVOD_CONFIG_INT, run.vo.max_tracks, 50, 100000),
 	NUM("vo", "ratio", MVOD_CONFIG_DOUBLE, run.vo.ratio, 0.1, 1.0),
 	NUM("vo", "best", MVOD_CONFIG_INT, run.vo.best_n, 0, 100000),
 	CHOICE("vo", "robust", "robust", run.vo.robust, mvod_robust_names),

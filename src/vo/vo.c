@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cv_shim.h"
+#include "klt.h"
 #include "match.h"
 #include "util/clock.h"
 #include "util/errbuf.h"
@@ -36,6 +37,7 @@ const char *mvod_scale_source_name(enum mvod_scale_source s)
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
 }
 
+const char *const mvod_frontend_names[] = {"orb", "klt", NULL};
 const char *const mvod_detector_names[] = {"orb", "sift", NULL};
 const char *const mvod_matcher_names[MVOD_MATCHER_COUNT + 1] = {"bf", "bf-cross", "bf-ratio",
 								"flann", "flann-ratio", NULL};
@@ -57,8 +59,10 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 	*p = (struct mvod_vo_params){
 		.resize = 1.0,
 		.blur_ksize = 0,
+		.frontend = MVOD_FRONTEND_ORB,
 		.detector = MVOD_DETECTOR_ORB,
 		.max_features = 2000,
+		.max_tracks = 500,
 		.matcher = MVOD_MATCHER_BF,
 		.ratio = 0.8,
 		.best_n = 200,
@@ -142,6 +146,26 @@ int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_ca
 			 MVOD_VO_MIN_PX);
 }
 
+/* The descriptor front end: detector and matcher. */
+static int descriptors_create(struct mvod_vo *vo)
+{
+	const struct mvod_vo_params *p = &vo->p;
+	int ret = mvod_cv_detector_create(p->detector, p->max_features, vo->cam.width,
+					  vo->cam.height, &vo->det);
+	if (ret)
+		return ret;
+	struct mvod_match_params mp = {p->matcher, p->detector, p->ratio, p->best_n};
+	return mvod_matcher_create(&mp, vo->cap, &vo->matcher);
+}
+
+static int klt_create(struct mvod_vo *vo)
+{
+	struct mvod_klt_params kp;
+	mvod_klt_params_default(&kp);
+	kp.max_tracks = vo->p.max_tracks;
+	return mvod_klt_create(&kp, vo->cam.width, vo->cam.height, &vo->klt);
+}
+
 int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		   struct mvod_vo **out)
 {
@@ -150,17 +174,12 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 		return -ENOMEM;
 	vo->p = *params;
 	/* ORB and SIFT may return a few more than asked for (ties); the cap leaves room. */
-	vo->cap = params->max_features + params->max_features / 4 + 16;
+	int n = params->frontend == MVOD_FRONTEND_KLT ? params->max_tracks : params->max_features;
+	vo->cap = n + n / 4 + 16;
 	int ret = mvod_cv_preproc_create(cam, params->resize, params->blur_ksize, &vo->cam, &vo->pre);
 	if (ret)
 		goto fail;
-	ret = mvod_cv_detector_create(params->detector, params->max_features, vo->cam.width,
-				      vo->cam.height, &vo->det);
-	if (ret)
-		goto fail;
-	struct mvod_match_params mp = {params->matcher, params->detector, params->ratio,
-				       params->best_n};
-	ret = mvod_matcher_create(&mp, vo->cap, &vo->matcher);
+	ret = params->frontend == MVOD_FRONTEND_KLT ? klt_create(vo) : descriptors_create(vo);
 	if (ret)
 		goto fail;
 	ret = alloc_buffers(vo);
@@ -184,6 +203,7 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	mvod_cv_preproc_destroy(vo->pre);
 	mvod_cv_detector_destroy(vo->det);
 	mvod_matcher_destroy(vo->matcher);
+	mvod_klt_destroy(vo->klt);
 	for (int i = 0; i < 2; i++)
 		slot_fini(&vo->slot[i]);
 	free(vo->matches);
@@ -250,6 +270,8 @@ void mvod_vo_restart(struct mvod_vo *vo)
 {
 	vo->have_ref = 0;
 	vo->state = MVOD_STATE_INITIALIZING;
+	if (vo->klt)
+		mvod_klt_reset(vo->klt);
 }
 
 /*
@@ -260,6 +282,7 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 {
 	double t0 = 1e3 * mvod_now_s();
 	int n = vo->cur->f.n;
+	const struct frame_slot *tracked = vo->cur;
 	bool matched = false; /* enough matches against the reference to estimate motion */
 	res->features = n;
 	if (!vo->have_ref) {
@@ -267,8 +290,10 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 	} else if (n < vo->p.min_matches) {
 		res->status = MVOD_FRAME_FEW_FEATURES;
 	} else {
-		int ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches, vo->cap,
-				     &res->matches);
+		/* KLT matched while tracking: its matches are in vo->matches already. */
+		int ret = vo->klt ? (res->matches = vo->klt_matches, 0)
+				  : mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches,
+					       vo->cap, &res->matches);
 		if (ret)
 			return ret;
 		matched = res->matches >= vo->p.min_matches;
@@ -278,6 +303,8 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 	if (matched)
 		res->status = mvod_twoview_estimate(vo, gt, res);
 	settle(vo, gt, res);
+	if (vo->klt && vo->ref == tracked)
+		mvod_klt_promote(vo->klt);
 	res->pose = vo->pose;
 	res->state = vo->state;
 	res->ms[MVOD_STAGE_MATCH] = t1 - t0;
@@ -306,7 +333,8 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
 	if (ret)
 		return ret;
 	double t1 = 1e3 * mvod_now_s();
-	ret = mvod_cv_detect(vo->det, &grey, &vo->cur->f);
+	ret = vo->klt ? mvod_klt_track(vo->klt, &grey, &vo->cur->f, vo->matches, &vo->klt_matches)
+		      : mvod_cv_detect(vo->det, &grey, &vo->cur->f);
 	if (ret)
 		return ret;
 	res->ms[MVOD_STAGE_PREPROCESS] = t1 - t0;
@@ -318,7 +346,7 @@ int mvod_vo_process_features(struct mvod_vo *vo, const struct mvod_features *f,
 			     const double *gt_position, struct mvod_vo_result *res)
 {
 	struct mvod_features *cur = &vo->cur->f;
-	if (f->n < 0 || f->n > cur->cap || f->desc_bytes != cur->desc_bytes)
+	if (vo->klt || f->n < 0 || f->n > cur->cap || f->desc_bytes != cur->desc_bytes)
 		return -EINVAL;
 	int ret = begin(vo, gt_position, res);
 	if (ret)

@@ -24,6 +24,8 @@ struct mvod_vo {
 	struct mvod_cv_preproc *pre;
 	struct mvod_cv_detector *det;
 	struct mvod_matcher *matcher;
+	struct mvod_klt *klt; /* the KLT front end (instead of det and matcher), or NULL */
+	int klt_matches;      /* matches the KLT front end wrote into matches this frame */
 	int cap;
 	struct frame_slot slot[2]; /* storage behind ref and cur */
 	struct frame_slot *ref, *cur;

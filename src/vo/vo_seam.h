@@ -15,7 +15,8 @@
  * mvod_vo_create, when resize is 1: the preprocessing does not touch keypoints given here),
  * f->desc of the VO's detector's size. f is copied (borrowed for the call). Stage times of
  * preprocessing and detection are 0. -EINVAL when f has more features than the VO's capacity
- * (max_features + max_features / 4 + 16) or descriptors of another size; otherwise as
+ * (max_features + max_features / 4 + 16), descriptors of another size, or a VO with
+ * the KLT front end, which tracks images, not features; otherwise as
  * mvod_vo_process.
  */
 int mvod_vo_process_features(struct mvod_vo *vo, const struct mvod_features *f,

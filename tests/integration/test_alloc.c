@@ -238,7 +238,7 @@ static int setup(void **state)
 }
 
 /* Runs the pipeline over max_frames frames of the clip, with every output on, under the count. */
-static void run(int64_t max_frames, bool count, struct tally *t)
+static void run(int64_t max_frames, bool count, enum mvod_frontend fe, struct tally *t)
 {
 	char source[300], calib[300], traj[300], url[400];
 	snprintf(source, sizeof(source), "file:%s/video.mkv", dir);
@@ -253,6 +253,7 @@ static void run(int64_t max_frames, bool count, struct tally *t)
 	o.calib = calib;
 	o.trajectory = traj;
 	o.max_frames = max_frames;
+	o.vo.frontend = fe;
 	struct mvod_run_summary sum;
 	for (int i = 0; i < n_owners; i++) {
 		atomic_store(&owners[i].calls, 0);
@@ -270,13 +271,12 @@ static void run(int64_t max_frames, bool count, struct tally *t)
 	}
 }
 
-static void test_loop_allocates_nothing_of_its_own(void **state)
+static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe)
 {
-	(void)state;
 	struct tally warm, a, b;
-	run(WARMUP, false, &warm);
-	run(SHORT, true, &a);
-	run(LONG, true, &b);
+	run(WARMUP, false, fe, &warm);
+	run(SHORT, true, fe, &a);
+	run(LONG, true, fe, &b);
 	const double frames = LONG - SHORT;
 	long own = -1, total_calls = 0, total_bytes = 0;
 	printf("allocations per frame in steady state, by the object that asked, and through which "
@@ -298,6 +298,19 @@ static void test_loop_allocates_nothing_of_its_own(void **state)
 	       total_bytes / frames);
 	/* mvod allocates at setup, so it has an entry; its per-frame difference must be none. */
 	assert_int_equal(own, 0);
+}
+
+static void test_loop_allocates_nothing_of_its_own(void **state)
+{
+	(void)state;
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_ORB);
+}
+
+/* The KLT front end's tracks, corners and pyramids live in buffers made at create. */
+static void test_klt_loop_allocates_nothing_of_its_own(void **state)
+{
+	(void)state;
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT);
 }
 
 static long calls_of(const void *base)
@@ -333,6 +346,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_attribution),
 		cmocka_unit_test(test_loop_allocates_nothing_of_its_own),
+		cmocka_unit_test(test_klt_loop_allocates_nothing_of_its_own),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

@@ -40,6 +40,8 @@ static const char every_key[] =
 	"[vo]\n"
 	"scale = gt\n"
 	"features = 777\n"
+	"frontend = klt\n"
+	"tracks = 333\n"
 	"ratio = 0.65\n"
 	"detector = sift\n"
 	"matcher = flann-ratio\n"
@@ -74,6 +76,8 @@ static void assert_every_key(const struct mvod_config *c)
 	assert_string_equal(c->run.calib, "calib.json");
 	assert_int_equal(c->run.vo.scale_mode, MVOD_SCALE_MODE_GT);
 	assert_int_equal(c->run.vo.max_features, 777);
+	assert_int_equal(c->run.vo.frontend, MVOD_FRONTEND_KLT);
+	assert_int_equal(c->run.vo.max_tracks, 333);
 	assert_true(c->run.vo.ratio == 0.65);
 	assert_int_equal(c->run.vo.detector, MVOD_DETECTOR_SIFT);
 	assert_int_equal(c->run.vo.matcher, MVOD_MATCHER_FLANN_RATIO);
@@ -170,7 +174,7 @@ static void test_errors(void **state)
 	expect_error(WITH("[camera]\nuri = x\n"), "test.conf:4: [camera] uri: unknown section",
 		     NULL);
 	expect_error(WITH("[vo]\nfeatres = 100\n"), "test.conf:4: [vo] featres: unknown key",
-		     "[vo] has scale, detector, matcher, features");
+		     "[vo] has scale, frontend, detector, matcher, features");
 	expect_error(WITH("[vo]\nfeatures = many\n"),
 		     "test.conf:4: [vo] features = many: expected an integer in [50, 100000]", NULL);
 	expect_error(WITH("[vo]\nfeatures = 12.5\n"), "test.conf:4: [vo] features", "an integer");

@@ -1,0 +1,335 @@
+/*
+ * The KLT front end's bookkeeping in plain C: tracks in fixed-capacity arrays, the
+ * forward-backward check, Harris ranking of FAST corners and their spread over a grid. OpenCV's
+ * part (pyramids, Lucas-Kanade, FAST) is behind klt_shim.h.
+ */
+#include "klt.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "klt_shim.h"
+
+/*
+ * Lucas-Kanade window, pixels, and pyramid levels above the image, with at most ITERATIONS
+ * steps per level down to a step of EPS_PX (klt_shim.cpp). OpenCV's defaults are 21, 3, 30,
+ * 0.01; on KITTI 06 with 500 tracks they cost 1.25e9 instructions in LK over 5 frames
+ * (callgrind), and 15, 2, 10, 0.03 cost 0.55e9 at the same err_avg (06: 0.077 -> 0.073,
+ * 07: 0.048 -> 0.044), but the smaller window and pyramid lost the 31 px flow of a new track
+ * (no prediction yet) on mvod-synth's rotate-in-place: 26 of 500 tracks kept, against 287
+ * with 21, 3 (tests/integration/test_klt.c). So the window and levels stay OpenCV's (flows to
+ * about 21 * 2^3 / 2 = 84 px) and only the steps are capped.
+ */
+#define WIN 21
+#define LEVELS 3
+#define ITERATIONS 10
+#define EPS_PX 0.03
+/*
+ * Corners and tracks stay this many pixels inside the image: the Harris score's 7x7 window
+ * and its central differences reach 4 pixels out.
+ */
+#define BORDER 4
+/* At most one track per cell of OCC_PX x OCC_PX pixels: no two tracks follow one corner. */
+#define OCC_PX 6
+/* Detection's grid: each of BUCKETS_X x BUCKETS_Y cells first gets its share of max_tracks. */
+#define BUCKETS_X 8
+#define BUCKETS_Y 4
+
+struct corner {
+	float x, y, score;
+};
+
+struct mvod_klt {
+	struct mvod_klt_params p;
+	struct mvod_klt_cv *cv;
+	int w, h;
+	int n;       /* live tracks */
+	int have_prev; /* a frame was tracked before (since create or reset) */
+	float *pos;  /* 2 * max_tracks: position in the last frame, pixels */
+	float *vel;  /* 2 * max_tracks: displacement over the last frame: the predicted flow */
+	float *err;  /* max_tracks: last forward-backward error, pixels */
+	float *score; /* max_tracks: Harris score at detection */
+	int *ref;    /* max_tracks: index in the reference frame, -1 when it holds no such track */
+	float *next, *back; /* 2 * max_tracks: forward and backward LK results */
+	uint8_t *ok, *ok_back;
+	int fast_cap;
+	float *fast_xy;      /* 2 * fast_cap */
+	struct corner *corners; /* fast_cap */
+	int occ_w, occ_h;
+	uint8_t *occ;        /* occ_w * occ_h occupancy of OCC_PX cells */
+	int bucket[BUCKETS_X * BUCKETS_Y];
+};
+
+void mvod_klt_params_default(struct mvod_klt_params *p)
+{
+	/* fb_px: 0.5 px passes every track of a textured rotating scene (tests/integration/test_klt.c). */
+	*p = (struct mvod_klt_params){.max_tracks = 500, .fb_px = 0.5, .fast_threshold = 20};
+}
+
+static int alloc_arrays(struct mvod_klt *k)
+{
+	size_t n = (size_t)k->p.max_tracks;
+	k->pos = calloc(2 * n, sizeof(float));
+	k->vel = calloc(2 * n, sizeof(float));
+	k->err = calloc(n, sizeof(float));
+	k->score = calloc(n, sizeof(float));
+	k->ref = calloc(n, sizeof(int));
+	k->next = calloc(2 * n, sizeof(float));
+	k->back = calloc(2 * n, sizeof(float));
+	k->ok = calloc(n, 1);
+	k->ok_back = calloc(n, 1);
+	k->fast_xy = calloc(2 * (size_t)k->fast_cap, sizeof(float));
+	k->corners = calloc((size_t)k->fast_cap, sizeof(*k->corners));
+	k->occ = calloc((size_t)k->occ_w * (size_t)k->occ_h, 1);
+	return k->pos && k->vel && k->err && k->score && k->ref && k->next && k->back && k->ok &&
+			       k->ok_back && k->fast_xy && k->corners && k->occ
+		       ? 0
+		       : -ENOMEM;
+}
+
+int mvod_klt_create(const struct mvod_klt_params *p, int width, int height, struct mvod_klt **out)
+{
+	if (p->max_tracks < 1 || !(p->fb_px > 0) || p->fast_threshold < 1 ||
+	    width < 2 * BORDER + 1 || height < 2 * BORDER + 1)
+		return -EINVAL;
+	struct mvod_klt *k = calloc(1, sizeof(*k));
+	if (!k)
+		return -ENOMEM;
+	k->p = *p;
+	k->w = width;
+	k->h = height;
+	/* FAST finds about 1 corner per 100 pixels on KITTI at threshold 20; one per 16 is room. */
+	k->fast_cap = width * height / 16 + 16;
+	k->occ_w = (width + OCC_PX - 1) / OCC_PX;
+	k->occ_h = (height + OCC_PX - 1) / OCC_PX;
+	int ret = alloc_arrays(k);
+	if (!ret)
+		ret = mvod_klt_cv_create(width, height, WIN, LEVELS, ITERATIONS, EPS_PX, k->fast_cap,
+					 &k->cv);
+	if (ret) {
+		mvod_klt_destroy(k);
+		return ret;
+	}
+	*out = k;
+	return 0;
+}
+
+void mvod_klt_destroy(struct mvod_klt *k)
+{
+	if (!k)
+		return;
+	mvod_klt_cv_destroy(k->cv);
+	free(k->pos);
+	free(k->vel);
+	free(k->err);
+	free(k->score);
+	free(k->ref);
+	free(k->next);
+	free(k->back);
+	free(k->ok);
+	free(k->ok_back);
+	free(k->fast_xy);
+	free(k->corners);
+	free(k->occ);
+	free(k);
+}
+
+static bool inside(const struct mvod_klt *k, float x, float y)
+{
+	return x >= BORDER && y >= BORDER && x <= k->w - 1 - BORDER && y <= k->h - 1 - BORDER;
+}
+
+/*
+ * Every track into the newest frame: forward from its position with its last displacement as
+ * the initial flow, then back with the same displacement undone as the guess; a track stays
+ * when both converge, it is still inside, and it comes back within fb_px of where it started.
+ */
+static int follow(struct mvod_klt *k)
+{
+	int n = k->n;
+	for (int i = 0; i < 2 * n; i++)
+		k->next[i] = k->pos[i] + k->vel[i];
+	int ret = mvod_klt_cv_flow(k->cv, 0, k->pos, k->next, n, k->ok);
+	for (int i = 0; i < 2 * n && !ret; i++)
+		k->back[i] = k->next[i] - k->vel[i];
+	if (!ret)
+		ret = mvod_klt_cv_flow(k->cv, 1, k->next, k->back, n, k->ok_back);
+	if (ret)
+		return ret;
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		float x = k->next[2 * i], y = k->next[2 * i + 1];
+		float fb = hypotf(k->back[2 * i] - k->pos[2 * i], k->back[2 * i + 1] - k->pos[2 * i + 1]);
+		if (!k->ok[i] || !k->ok_back[i] || !(fb <= k->p.fb_px) || !inside(k, x, y))
+			continue;
+		k->vel[2 * m] = x - k->pos[2 * i];
+		k->vel[2 * m + 1] = y - k->pos[2 * i + 1];
+		k->pos[2 * m] = x;
+		k->pos[2 * m + 1] = y;
+		k->err[m] = fb;
+		k->score[m] = k->score[i];
+		k->ref[m] = k->ref[i];
+		m++;
+	}
+	k->n = m;
+	return 0;
+}
+
+/* Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. */
+static float harris(const struct mvod_image *g, int x, int y)
+{
+	float a = 0, b = 0, c = 0;
+	for (int dy = -3; dy <= 3; dy++) {
+		const uint8_t *r = g->data + (size_t)(y + dy) * (size_t)g->stride + x;
+		for (int dx = -3; dx <= 3; dx++) {
+			float ix = (float)r[dx + 1] - r[dx - 1];
+			float iy = (float)r[dx + g->stride] - r[dx - g->stride];
+			a += ix * ix;
+			b += iy * iy;
+			c += ix * iy;
+		}
+	}
+	return a * b - c * c - 0.04f * (a + b) * (a + b);
+}
+
+/*
+ * Strongest first, by Shell sort (Ciura's gaps) in place: glibc's qsort mallocs a buffer for
+ * arrays over 1 kB, which tests/integration/test_alloc.c caught (0.2 calls per frame).
+ */
+static void sort_by_score(struct corner *c, int n)
+{
+	static const int gaps[] = {1750, 701, 301, 132, 57, 23, 10, 4, 1};
+	for (size_t g = 0; g < sizeof(gaps) / sizeof(gaps[0]); g++) {
+		for (int i = gaps[g]; i < n; i++) {
+			struct corner x = c[i];
+			int j = i;
+			for (; j >= gaps[g] && c[j - gaps[g]].score < x.score; j -= gaps[g])
+				c[j] = c[j - gaps[g]];
+			c[j] = x;
+		}
+	}
+}
+
+static int occ_index(const struct mvod_klt *k, float x, float y)
+{
+	return (int)(y / OCC_PX) * k->occ_w + (int)(x / OCC_PX);
+}
+
+static int bucket_index(const struct mvod_klt *k, float x, float y)
+{
+	return (int)(y * BUCKETS_Y / k->h) * BUCKETS_X + (int)(x * BUCKETS_X / k->w);
+}
+
+/*
+ * Marks the cells of the live tracks, dropping the younger of two tracks that converged on one
+ * cell (tracks are kept oldest first), and counts them per bucket.
+ */
+static void mark_tracks(struct mvod_klt *k)
+{
+	memset(k->occ, 0, (size_t)k->occ_w * (size_t)k->occ_h);
+	memset(k->bucket, 0, sizeof(k->bucket));
+	int m = 0;
+	for (int i = 0; i < k->n; i++) {
+		float x = k->pos[2 * i], y = k->pos[2 * i + 1];
+		int o = occ_index(k, x, y);
+		if (k->occ[o])
+			continue;
+		k->occ[o] = 1;
+		k->bucket[bucket_index(k, x, y)]++;
+		k->pos[2 * m] = x;
+		k->pos[2 * m + 1] = y;
+		k->vel[2 * m] = k->vel[2 * i];
+		k->vel[2 * m + 1] = k->vel[2 * i + 1];
+		k->err[m] = k->err[i];
+		k->score[m] = k->score[i];
+		k->ref[m] = k->ref[i];
+		m++;
+	}
+	k->n = m;
+}
+
+/* New tracks from the ranked corners, strongest first, in free cells; quota: per bucket, or 0. */
+static void add_corners(struct mvod_klt *k, int nc, int quota)
+{
+	for (int i = 0; i < nc && k->n < k->p.max_tracks; i++) {
+		const struct corner *c = &k->corners[i];
+		int o = occ_index(k, c->x, c->y), b = bucket_index(k, c->x, c->y);
+		if (k->occ[o] || (quota && k->bucket[b] >= quota))
+			continue;
+		k->occ[o] = 1;
+		k->bucket[b]++;
+		int j = k->n++;
+		k->pos[2 * j] = c->x;
+		k->pos[2 * j + 1] = c->y;
+		k->vel[2 * j] = k->vel[2 * j + 1] = 0;
+		k->err[j] = 0;
+		k->score[j] = c->score;
+		k->ref[j] = -1;
+	}
+}
+
+/*
+ * Tops the tracks up with FAST corners ranked by Harris score: first each grid bucket up to
+ * its share of max_tracks, so that no part of the image is left without tracks, then the
+ * strongest of the rest anywhere.
+ */
+static int detect(struct mvod_klt *k, const struct mvod_image *grey)
+{
+	int nf;
+	int ret = mvod_klt_cv_fast(k->cv, grey, k->p.fast_threshold, k->fast_xy, &nf);
+	if (ret)
+		return ret;
+	int nc = 0;
+	for (int i = 0; i < nf; i++) {
+		float x = k->fast_xy[2 * i], y = k->fast_xy[2 * i + 1];
+		float s = inside(k, x, y) ? harris(grey, (int)x, (int)y) : 0;
+		if (s > 0) /* not an edge or a flat patch */
+			k->corners[nc++] = (struct corner){x, y, s};
+	}
+	sort_by_score(k->corners, nc);
+	mark_tracks(k);
+	int cells = BUCKETS_X * BUCKETS_Y;
+	add_corners(k, nc, (k->p.max_tracks + cells - 1) / cells);
+	add_corners(k, nc, 0);
+	return 0;
+}
+
+int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvod_features *f,
+		   struct mvod_match *matches, int *n_matches)
+{
+	if (f->cap < k->p.max_tracks)
+		return -EINVAL;
+	int ret = mvod_klt_cv_push(k->cv, grey);
+	if (!ret && k->have_prev)
+		ret = follow(k);
+	if (ret)
+		return ret;
+	k->have_prev = 1;
+	/* Topping up at 3/4: a KITTI frame loses up to a tenth of its tracks. */
+	if (k->n < k->p.max_tracks * 3 / 4 && (ret = detect(k, grey)))
+		return ret;
+	int m = 0;
+	for (int i = 0; i < k->n; i++) {
+		f->kp[i] = (struct mvod_keypoint){k->pos[2 * i], k->pos[2 * i + 1], 0, k->score[i]};
+		if (k->ref[i] >= 0)
+			matches[m++] = (struct mvod_match){k->ref[i], i, k->err[i]};
+	}
+	f->n = k->n;
+	*n_matches = m;
+	return 0;
+}
+
+void mvod_klt_promote(struct mvod_klt *k)
+{
+	for (int i = 0; i < k->n; i++)
+		k->ref[i] = i;
+}
+
+void mvod_klt_reset(struct mvod_klt *k)
+{
+	k->n = 0;
+	k->have_prev = 0;
+}
