@@ -44,6 +44,14 @@ enum mvod_scale_mode {
 	MVOD_SCALE_MODE_GT = 1,
 };
 
+/* How poses are estimated. */
+enum mvod_vo_mode {
+	MVOD_VO_TWOVIEW = 0, /* frame to frame: essential matrix, step length from shared structure */
+	MVOD_VO_MAP = 1,     /* a local map of keyframes and points: PnP per frame, windowed BA */
+};
+/* The modes' names in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_vo_mode_names[];
+
 /* Robust estimator of the essential matrix. */
 enum mvod_robust_method {
 	MVOD_ROBUST_MAGSAC = 0, /* MAGSAC++ (OpenCV USAC): no hard threshold to tune, fewer wrong models */
@@ -104,6 +112,7 @@ enum mvod_stage {
 extern const char *const mvod_stage_names[MVOD_STAGE_COUNT];
 
 struct mvod_vo_params {
+	enum mvod_vo_mode mode; /* TWOVIEW */
 	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
 	enum mvod_detector detector; /* ORB */

@@ -15,6 +15,7 @@
 /* Enum fields are written through an int. */
 _Static_assert(sizeof(enum mvod_scale_mode) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_robust_method) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_vo_mode) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_detector) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_matcher_kind) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_traj_format) == sizeof(int), "enum size");
@@ -38,6 +39,7 @@ const struct mvod_config_key mvod_config_keys[] = {
 	NUM("source", "max-frames", MVOD_CONFIG_INT64, run.max_frames, 0, 1e12),
 	OPTSTR("source", "gt", "gt", run.gt),
 	OPTSTR("calibration", "file", "calib", run.calib),
+	CHOICE("vo", "mode", "mode", run.vo.mode, mvod_vo_mode_names),
 	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
 	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
 	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names),

@@ -46,6 +46,7 @@ static const char every_key[] =
 	"robust = ransac\n"
 	"ransac-px = 2.5\n"
 	"confidence = 0.99\n"
+	"mode = map\n"
 	"min-parallax = 3\n"
 	"resize = 0.5\n"
 	"blur = 5\n"
@@ -79,6 +80,7 @@ static void assert_every_key(const struct mvod_config *c)
 	assert_true(c->run.vo.ransac_px == 2.5);
 	assert_true(c->run.vo.ransac_conf == 0.99);
 	assert_true(c->run.vo.min_parallax_px == 3);
+	assert_int_equal(c->run.vo.mode, MVOD_VO_MAP);
 	assert_true(c->run.vo.resize == 0.5);
 	assert_int_equal(c->run.vo.blur_ksize, 5);
 	assert_false(c->lcm_enabled);
