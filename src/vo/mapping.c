@@ -21,7 +21,7 @@
  */
 #define MAX_COS_PARALLAX 0.9998
 /* Keyframes before the new one that it triangulates against (the descriptor table each). */
-#define TRIANGULATE_WITH 2
+#define TRIANGULATE_WITH 3
 /* Bundle adjustment's Levenberg-Marquardt iterations per keyframe. */
 #define BA_ITERATIONS 5
 
@@ -40,11 +40,12 @@ static bool reprojects(const double K[4], const double R[9], const double t[3],
 	return du * du + dv * dv <= CHI2_GATE;
 }
 
-/* Adds the frame of slot k (camera-to-world pose) as a keyframe. */
-static int add_frame_kf(struct mvod_mapvo *mv, const struct frame_slot *k, mvod_map_id *out)
+/* Adds the frame of slot k, at camera-to-world pose c2w, as a keyframe. */
+static int add_frame_kf(struct mvod_mapvo *mv, const struct frame_slot *k,
+			const struct mvod_pose *c2w, mvod_map_id *out)
 {
 	struct mvod_pose w2c;
-	mvod_pose_inverse(&k->pose, &w2c);
+	mvod_pose_inverse(c2w, &w2c);
 	for (int i = 0; i < k->f.n; i++)
 		mv->kp[i] = (struct mvod_map_kp){k->f.kp[i].x, k->f.kp[i].y, k->f.kp[i].response,
 						 k->f.kp[i].octave};
@@ -71,23 +72,23 @@ static int add_point(struct mvod_mapvo *mv, const double X[3], mvod_map_id a, in
 	return ret;
 }
 
-/* The two-view step's structure (in vo->ref's camera) as points of keyframes a and b. */
+/* The two-view step's structure (in vo->cur's camera) as points of keyframes a and b. */
 static int init_points(struct mvod_vo *vo, int n, mvod_map_id a, mvod_map_id b)
 {
 	struct mvod_mapvo *mv = vo->mapvo;
 	const struct mvod_map_keyframe *ka = mvod_map_keyframe(mv->map, a);
 	const struct mvod_map_keyframe *kb = mvod_map_keyframe(mv->map, b);
 	int made = 0;
-	for (int j = 0; j < vo->ref->f.n; j++)
-		mv->ref_pt[j] = MVOD_MAP_NONE;
+	for (int j = 0; j < vo->cur->f.n; j++)
+		mv->ref_pt[j] = MVOD_MAP_NONE; /* the current frame is about to be the reference */
 	for (int i = 0; i < n; i++) {
 		int ia = vo->matches[i].a, ib = vo->matches[i].b;
-		if (!vo->ref->has_pt[ib])
+		if (!vo->cur->has_pt[ib])
 			continue;
 		double X[3];
-		mvod_mat3_vec(vo->ref->pose.R, vo->ref->pts + 3 * ib, X);
+		mvod_mat3_vec(vo->pose.R, vo->cur->pts + 3 * ib, X);
 		for (int k = 0; k < 3; k++)
-			X[k] += vo->ref->pose.t[k];
+			X[k] += vo->pose.t[k];
 		if (!reprojects(mv->K, ka->Rcw, ka->tcw, X, &ka->kp[ia]) ||
 		    !reprojects(mv->K, kb->Rcw, kb->tcw, X, &kb->kp[ib]))
 			continue;
@@ -99,16 +100,6 @@ static int init_points(struct mvod_vo *vo, int n, mvod_map_id a, mvod_map_id b)
 		made++;
 	}
 	return made;
-}
-
-/* Points a keyframe observes (for the keyframe policy). */
-static int observed(const struct mvod_mapvo *mv, mvod_map_id kf)
-{
-	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);
-	int n = 0;
-	for (int j = 0; k && j < k->n; j++)
-		n += mvod_map_point(mv->map, k->pt[j]) != NULL;
-	return n;
 }
 
 /* The tracking state once a map exists: the last frame b and the step that led to it. */
@@ -124,8 +115,25 @@ static void start_tracking(struct mvod_mapvo *mv, mvod_map_id a, mvod_map_id b)
 	for (int k = 0; k < 3; k++)
 		mv->vt[k] = kb->tcw[k] - v[k];
 	mv->since_kf = 0;
-	mv->kf_tracked = observed(mv, b);
+	mv->kf_tracked = mvod_map_n_points(mv->map);
 	mv->active = true;
+}
+
+/*
+ * The first map waits for parallax: a step with too few well-triangulated points keeps only
+ * its rotation (as a rotation-only frame does), so the reference stays and the baseline grows.
+ */
+static void hold_translation(struct mvod_vo *vo, struct mvod_vo_result *res)
+{
+	struct mvod_pose inv, rel;
+	mvod_pose_inverse(&vo->ref->pose, &inv);
+	mvod_pose_compose(&inv, &vo->pose, &rel);
+	memset(rel.t, 0, sizeof(rel.t));
+	mvod_pose_compose(&vo->ref->pose, &rel, &vo->pose);
+	res->status = MVOD_FRAME_ROTATION;
+	res->scale_source = MVOD_SCALE_NONE;
+	res->step_m = 0;
+	vo->have_step = 0; /* the map's first step is still to define the unit */
 }
 
 int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
@@ -135,14 +143,17 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
 	if (res->status != MVOD_FRAME_MOTION)
 		return 0;
 	for (int i = 0; i < n; i++)
-		good += vo->ref->has_pt[vo->matches[i].b];
-	if (good < INIT_MIN_POINTS)
+		good += vo->cur->has_pt[vo->matches[i].b];
+	if (good < INIT_MIN_POINTS) {
+		if (!mv->had_map)
+			hold_translation(vo, res);
 		return 0;
+	}
 	mvod_map_reset(mv->map);
 	mvod_map_id a, b;
-	int ret = add_frame_kf(mv, vo->cur, &a); /* settle() swapped: cur is the old reference */
+	int ret = add_frame_kf(mv, vo->ref, &vo->ref->pose, &a);
 	if (!ret)
-		ret = add_frame_kf(mv, vo->ref, &b);
+		ret = add_frame_kf(mv, vo->cur, &vo->pose, &b);
 	if (!ret)
 		ret = init_points(vo, n, a, b);
 	if (ret < INIT_MIN_POINTS) {
@@ -153,6 +164,7 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
 	if (ret)
 		return ret;
 	start_tracking(mv, a, b);
+	mv->had_map = true;
 	res->keyframe = true;
 	return 1;
 }
@@ -195,8 +207,13 @@ static bool triangulate(const struct mvod_mapvo *mv, const struct mvod_map_keyfr
 	if (cos(mvod_vec3_angle(ra, rb)) > MAX_COS_PARALLAX ||
 	    !mvod_triangulate_midpoint(R, t, x1, x2, &d1, &d2) || !(d1 > 0) || !(d2 > 0))
 		return false;
-	double c[3] = {x1[0] * d1 - A->tcw[0], x1[1] * d1 - A->tcw[1], d1 - A->tcw[2]};
-	mvod_mat3_tvec(A->Rcw, c, X);
+	/* The midpoint of the two rays' closest points, in the world. */
+	double ca[3] = {x1[0] * d1 - A->tcw[0], x1[1] * d1 - A->tcw[1], d1 - A->tcw[2]};
+	double cb[3] = {x2[0] * d2 - B->tcw[0], x2[1] * d2 - B->tcw[1], d2 - B->tcw[2]}, Xb[3];
+	mvod_mat3_tvec(A->Rcw, ca, X);
+	mvod_mat3_tvec(B->Rcw, cb, Xb);
+	for (int k = 0; k < 3; k++)
+		X[k] = 0.5 * (X[k] + Xb[k]);
 	return reprojects(mv->K, A->Rcw, A->tcw, X, &A->kp[ja]) &&
 	       reprojects(mv->K, B->Rcw, B->tcw, X, &B->kp[jb]);
 }
@@ -233,15 +250,17 @@ static int triangulate_pair(struct mvod_vo *vo, mvod_map_id a, mvod_map_id b)
 }
 
 /* The current frame's tracked points become the new keyframe's observations. */
-static void observe(struct mvod_mapvo *mv, mvod_map_id kf, int n)
+static int observe(struct mvod_mapvo *mv, mvod_map_id kf, int n)
 {
+	int k = 0;
 	for (int j = 0; j < n; j++) {
 		/* A point the eviction just erased is stale: its add_obs fails, nothing changes. */
 		if (mvod_map_add_obs(mv->map, mv->cur_pt[j], kf, j) == 0)
-			mvod_map_update_desc(mv->map, mv->cur_pt[j]);
+			k += mvod_map_update_desc(mv->map, mv->cur_pt[j]) == 0;
 		else
 			mv->cur_pt[j] = MVOD_MAP_NONE;
 	}
+	return k;
 }
 
 int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added)
@@ -250,14 +269,15 @@ int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added)
 	struct mvod_pose c2w = {0};
 	memcpy(c2w.R, mv->Rcw, sizeof(c2w.R));
 	memcpy(c2w.t, mv->tcw, sizeof(c2w.t));
-	mvod_pose_inverse(&c2w, &vo->cur->pose); /* add_frame_kf reads the slot's pose */
+	mvod_pose_inverse(&c2w, &c2w);
 	mvod_map_id kf;
-	int ret = add_frame_kf(mv, vo->cur, &kf);
+	int ret = add_frame_kf(mv, vo->cur, &c2w, &kf);
 	if (ret)
 		return ret;
-	observe(mv, kf, vo->cur->f.n);
+	mv->kf_tracked = observe(mv, kf, vo->cur->f.n);
 	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap);
-	for (int i = nk - 2; i >= 0 && i >= nk - 1 - TRIANGULATE_WITH; i--) {
+	/* The widest baseline first: its points are the best placed; nearer ones fill in. */
+	for (int i = nk - 1 - TRIANGULATE_WITH < 0 ? 0 : nk - 1 - TRIANGULATE_WITH; i < nk - 1; i++) {
 		ret = triangulate_pair(vo, mv->kfs[i], kf);
 		if (ret)
 			return ret;
@@ -271,7 +291,6 @@ int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added)
 	memcpy(mv->tcw, k->tcw, sizeof(mv->tcw));
 	for (int j = 0; j < k->n; j++)
 		mv->cur_pt[j] = k->pt[j];
-	mv->kf_tracked = observed(mv, kf);
 	mv->since_kf = 0;
 	*added = true;
 	return 0;

@@ -56,10 +56,11 @@ struct mvod_mapvo {
 	mvod_map_id *kfs;             /* [kf_cap] */
 	/* State. */
 	bool active;           /* a map exists and the last frames tracked against it */
+	bool had_map;          /* a map existed: later ones carry its scale (the last speed) */
 	double Rcw[9], tcw[3]; /* the last tracked frame, camera from world */
 	double vR[9], vt[3];   /* its motion from the frame before (constant-velocity model) */
 	int since_kf;          /* frames since the last keyframe */
-	int kf_tracked;        /* points the last keyframe observes after mapping */
+	int kf_tracked;        /* points tracked into the last keyframe (before it triangulated) */
 };
 
 /* For the VO's camera (vo->cam) and feature cap (vo->cap); ORB only (-EINVAL otherwise). */
@@ -78,9 +79,10 @@ void mvod_mapvo_reset(struct mvod_mapvo *mv);
 int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res);
 
 /*
- * After a two-view frame settled: when it was a MOTION step with enough well-triangulated
- * points, builds the map from the step's two frames (vo->cur is the old reference, vo->ref
- * the new frame) and returns 1; else 0.
+ * After a two-view estimate, before the frame settles: when it was a MOTION step with enough
+ * well-triangulated points, builds the map from the step's two frames (vo->ref and vo->cur,
+ * at vo->pose) and returns 1; else 0. Before the first map, a MOTION step without enough
+ * becomes a rotation-only frame (translation held) so that parallax builds up.
  */
 int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
 

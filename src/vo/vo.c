@@ -298,14 +298,13 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 	double t1 = 1e3 * mvod_now_s();
 	if (matched)
 		res->status = mvod_twoview_estimate(vo, gt, res);
+	int made_map = vo->mapvo ? mvod_mapvo_init(vo, res) : 0;
+	if (made_map < 0)
+		return made_map;
 	settle(vo, gt, res);
-	if (vo->mapvo) {
-		/* Map mode: TRACKING means against a map; two-view frames only keep the pose going. */
-		int ret = mvod_mapvo_init(vo, res);
-		if (ret < 0)
-			return ret;
-		vo->state = ret ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING;
-	}
+	/* Map mode: TRACKING means against a map; two-view frames only keep the pose going. */
+	if (vo->mapvo)
+		vo->state = made_map ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING;
 	if (vo->mapvo)
 		map_counts(vo, res);
 	res->pose = vo->pose;
