@@ -166,7 +166,7 @@ static void test_errors(void **state)
 	expect_error(WITH("[camera]\nuri = x\n"), "test.conf:4: [camera] uri: unknown section",
 		     NULL);
 	expect_error(WITH("[vo]\nfeatres = 100\n"), "test.conf:4: [vo] featres: unknown key",
-		     "[vo] has scale, detector, matcher, features");
+		     "[vo] has mode, scale, detector, matcher, features");
 	expect_error(WITH("[vo]\nfeatures = many\n"),
 		     "test.conf:4: [vo] features = many: expected an integer in [50, 100000]", NULL);
 	expect_error(WITH("[vo]\nfeatures = 12.5\n"), "test.conf:4: [vo] features", "an integer");
