@@ -154,8 +154,8 @@ struct mvod_vo;
 #define MVOD_VO_MIN_PX 32
 
 /*
- * Whether frames of cam's size, scaled by params->resize, are large enough for the VO:
- * -EINVAL with the sizes and the minimum in err when not.
+ * Whether frames of cam's size, scaled by params->resize, are large enough for the VO, and the
+ * parameters fit together (map mode needs ORB): -EINVAL with the reason in err when not.
  */
 int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		       char *err, size_t errlen);

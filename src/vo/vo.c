@@ -117,6 +117,10 @@ static int alloc_buffers(struct mvod_vo *vo)
 int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		       char *err, size_t errlen)
 {
+	if (params->mode == MVOD_VO_MAP && params->detector != MVOD_DETECTOR_ORB)
+		return mvod_errf(err, errlen, -EINVAL, "--mode map keeps ORB descriptors in its map, "
+				 "not %s: use --detector orb or --mode twoview",
+				 mvod_detector_name(params->detector));
 	/* As mvod_cv_preproc_create rounds. */
 	int w = (int)(cam->width * params->resize + 0.5), h = (int)(cam->height * params->resize + 0.5);
 	if (w >= MVOD_VO_MIN_PX && h >= MVOD_VO_MIN_PX)
