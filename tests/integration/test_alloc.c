@@ -237,9 +237,6 @@ static int setup(void **state)
 	return 0;
 }
 
-/* The VO mode of the runs: each mode's per-frame loop is its own code. */
-static enum mvod_vo_mode vo_mode;
-
 /* Runs the pipeline over max_frames frames of the clip, with every output on, under the count. */
 static void run(int64_t max_frames, bool count, struct tally *t)
 {
@@ -256,7 +253,6 @@ static void run(int64_t max_frames, bool count, struct tally *t)
 	o.calib = calib;
 	o.trajectory = traj;
 	o.max_frames = max_frames;
-	o.vo.mode = vo_mode;
 	struct mvod_run_summary sum;
 	for (int i = 0; i < n_owners; i++) {
 		atomic_store(&owners[i].calls, 0);
@@ -276,9 +272,8 @@ static void run(int64_t max_frames, bool count, struct tally *t)
 
 static void test_loop_allocates_nothing_of_its_own(void **state)
 {
+	(void)state;
 	struct tally warm, a, b;
-	vo_mode = *state ? MVOD_VO_MAP : MVOD_VO_TWOVIEW;
-	printf("--mode %s\n", mvod_vo_mode_names[vo_mode]);
 	run(WARMUP, false, &warm);
 	run(SHORT, true, &a);
 	run(LONG, true, &b);
@@ -338,9 +333,6 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_attribution),
 		cmocka_unit_test(test_loop_allocates_nothing_of_its_own),
-		/* Map mode: keyframes, triangulation and bundle adjustment in the loop (Ceres's own
-		 * allocations are the library's, charged to it). */
-		cmocka_unit_test_prestate(test_loop_allocates_nothing_of_its_own, (void *)1),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
