@@ -426,9 +426,11 @@ static double record(struct run *r, const struct mvod_frame *f, const struct mvo
 		r->state = state;
 		r->faults.status_due = true; /* a state change is news: status goes with this frame */
 	}
-	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)",
-	    (long long)f->index, mvod_frame_status_name(res->status), res->features, res->matches,
-	    res->inliers, res->step_m, mvod_scale_source_name(res->scale_source));
+	LOG(DEBUG, "frame %lld: %s, %d features, %d matches, %d inliers, step %.4f (%s)%s, map %d "
+	    "points, %d keyframes", (long long)f->index, mvod_frame_status_name(res->status),
+	    res->features, res->matches, res->inliers, res->step_m,
+	    mvod_scale_source_name(res->scale_source), res->keyframe ? ", keyframe" : "",
+	    res->map_points, res->keyframes);
 	return frame_ms;
 }
 

@@ -44,6 +44,14 @@ enum mvod_scale_mode {
 	MVOD_SCALE_MODE_GT = 1,
 };
 
+/* How poses are estimated. */
+enum mvod_vo_mode {
+	MVOD_VO_TWOVIEW = 0, /* frame to frame: essential matrix, step length from shared structure */
+	MVOD_VO_MAP = 1,     /* a local map of keyframes and points: PnP per frame, windowed BA */
+};
+/* The modes' names in enum order, NULL-terminated (the config file's choices). */
+extern const char *const mvod_vo_mode_names[];
+
 /* Robust estimator of the essential matrix. */
 enum mvod_robust_method {
 	MVOD_ROBUST_MAGSAC = 0, /* MAGSAC++ (OpenCV USAC): no hard threshold to tune, fewer wrong models */
@@ -116,6 +124,7 @@ enum mvod_stage {
 extern const char *const mvod_stage_names[MVOD_STAGE_COUNT];
 
 struct mvod_vo_params {
+	enum mvod_vo_mode mode; /* TWOVIEW */
 	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
 	enum mvod_frontend frontend; /* ORB */
@@ -176,8 +185,8 @@ double mvod_vo_quality(const struct mvod_vo_params *p, const struct mvod_vo_resu
 #define MVOD_VO_MIN_PX 32
 
 /*
- * Whether frames of cam's size, scaled by params->resize, are large enough for the VO:
- * -EINVAL with the sizes and the minimum in err when not.
+ * Whether frames of cam's size, scaled by params->resize, are large enough for the VO, and the
+ * parameters fit together (map mode needs ORB): -EINVAL with the reason in err when not.
  */
 int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		       char *err, size_t errlen);

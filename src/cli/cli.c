@@ -133,6 +133,9 @@ void cli_usage_vo(FILE *out)
 {
 	fprintf(out,
 "Visual odometry:\n"
+"  --mode twoview|map    twoview (default): frame to frame, each step scaled by the structure\n"
+"                        it shares with the last; map: a local map of keyframes and points\n"
+"                        that carries one scale, PnP per frame and windowed bundle adjustment\n"
 "  --scale auto|gt       step length from triangulated structure (auto, default; the first\n"
 "                        step defines the unit) or from the ground truth (gt: benchmarking)\n"
 "  --frontend orb|klt    features matched by descriptor in every frame (orb, default: the\n"

@@ -15,6 +15,7 @@
 /* Enum fields are written through an int. */
 _Static_assert(sizeof(enum mvod_scale_mode) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_robust_method) == sizeof(int), "enum size");
+_Static_assert(sizeof(enum mvod_vo_mode) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_detector) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_frontend) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_matcher_kind) == sizeof(int), "enum size");
@@ -43,6 +44,7 @@ const struct mvod_config_key mvod_config_keys[] = {
 	{KEY("source", "clock", "clock", MVOD_CONFIG_ENUM, run.clock), .choices = mvod_clock_names,
 	 .run_only = true},
 	OPTSTR("calibration", "file", "calib", run.calib),
+	CHOICE("vo", "mode", "mode", run.vo.mode, mvod_vo_mode_names),
 	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
 	CHOICE("vo", "frontend", "frontend", run.vo.frontend, mvod_frontend_names),
 	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),

@@ -197,6 +197,16 @@ static void evict_oldest(struct mvod_map *m, struct mvod_map_stats *st)
 	st->evicted_kf++;
 }
 
+void mvod_map_reset(struct mvod_map *m)
+{
+	struct mvod_map_stats st = {0};
+	while (m->kf_n > 0)
+		evict_oldest(m, &st);
+	for (int s = 0; s < m->p.point_cap; s++)
+		if (m->pt[s].id != MVOD_MAP_NONE)
+			point_free(m, &m->pt[s]);
+}
+
 int mvod_map_add_keyframe(struct mvod_map *m, const struct mvod_map_kf_in *in, mvod_map_id *out,
 			  struct mvod_map_stats *st)
 {

@@ -103,6 +103,9 @@ struct mvod_map;
 int mvod_map_create(struct mvod_map **out, const struct mvod_map_params *p);
 void mvod_map_destroy(struct mvod_map *m);
 
+/* Empties the map: every keyframe and point leaves; ids kept from before are stale. */
+void mvod_map_reset(struct mvod_map *m);
+
 /*
  * Copies a keyframe in (no keypoint observes a point yet). When the ring is full the oldest
  * keyframe is evicted first: its observations leave their points, and points left with fewer

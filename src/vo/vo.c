@@ -6,6 +6,7 @@
 
 #include "cv_shim.h"
 #include "klt.h"
+#include "mapvo.h"
 #include "match.h"
 #include "util/clock.h"
 #include "util/errbuf.h"
@@ -42,6 +43,7 @@ const char *const mvod_detector_names[] = {"orb", "sift", NULL};
 const char *const mvod_matcher_names[MVOD_MATCHER_COUNT + 1] = {"bf", "bf-cross", "bf-ratio",
 								"flann", "flann-ratio", NULL};
 const char *const mvod_robust_names[] = {"magsac", "ransac", NULL};
+const char *const mvod_vo_mode_names[] = {"twoview", "map", NULL};
 #define DETECTORS ((int)(sizeof(mvod_detector_names) / sizeof(mvod_detector_names[0])) - 1)
 
 const char *mvod_detector_name(enum mvod_detector d)
@@ -57,6 +59,7 @@ const char *mvod_matcher_kind_name(enum mvod_matcher_kind m)
 void mvod_vo_params_default(struct mvod_vo_params *p)
 {
 	*p = (struct mvod_vo_params){
+		.mode = MVOD_VO_TWOVIEW,
 		.resize = 1.0,
 		.blur_ksize = 0,
 		.frontend = MVOD_FRONTEND_ORB,
@@ -132,6 +135,14 @@ static int alloc_buffers(struct mvod_vo *vo)
 int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		       char *err, size_t errlen)
 {
+	if (params->mode == MVOD_VO_MAP && params->detector != MVOD_DETECTOR_ORB)
+		return mvod_errf(err, errlen, -EINVAL, "--mode map keeps ORB descriptors in its map, "
+				 "not %s: use --detector orb or --mode twoview",
+				 mvod_detector_name(params->detector));
+	if (params->mode == MVOD_VO_MAP && params->frontend == MVOD_FRONTEND_KLT)
+		return mvod_errf(err, errlen, -EINVAL, "--mode map matches its points by ORB "
+				 "descriptors, which --frontend klt does not compute for every frame: "
+				 "use --frontend orb or --mode twoview");
 	/* As mvod_cv_preproc_create rounds. */
 	int w = (int)(cam->width * params->resize + 0.5), h = (int)(cam->height * params->resize + 0.5);
 	if (w >= MVOD_VO_MIN_PX && h >= MVOD_VO_MIN_PX)
@@ -185,6 +196,11 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 	ret = alloc_buffers(vo);
 	if (ret)
 		goto fail;
+	if (params->mode == MVOD_VO_MAP) {
+		ret = mvod_mapvo_create(vo, &vo->mapvo);
+		if (ret)
+			goto fail;
+	}
 	vo->ref = &vo->slot[0];
 	vo->cur = &vo->slot[1];
 	mvod_pose_identity(&vo->pose);
@@ -204,6 +220,7 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	mvod_cv_detector_destroy(vo->det);
 	mvod_matcher_destroy(vo->matcher);
 	mvod_klt_destroy(vo->klt);
+	mvod_mapvo_destroy(vo->mapvo);
 	for (int i = 0; i < 2; i++)
 		slot_fini(&vo->slot[i]);
 	free(vo->matches);
@@ -217,11 +234,7 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 	free(vo);
 }
 
-/*
- * The current frame becomes the reference. Its structure (from a motion step) is what the next
- * step scales against; without one, the next step falls back to constant speed.
- */
-static void promote(struct mvod_vo *vo, const double *gt, bool with_structure)
+void mvod_vo_promote(struct mvod_vo *vo, const double *gt, bool with_structure)
 {
 	if (!with_structure)
 		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
@@ -252,18 +265,18 @@ static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *
 	enum mvod_frame_status st = res->status;
 	if (st == MVOD_FRAME_MOTION) {
 		vo->state = MVOD_STATE_TRACKING;
-		promote(vo, gt, true);
+		mvod_vo_promote(vo, gt, true);
 		return;
 	}
 	if (st == MVOD_FRAME_ROTATION) {
 		if (res->matches < ROTATION_KEEP_OVERLAP * vo->p.min_matches)
-			promote(vo, gt, false);
+			mvod_vo_promote(vo, gt, false);
 		return;
 	}
 	if (vo->state == MVOD_STATE_TRACKING)
 		vo->state = MVOD_STATE_LOST;
 	if (st != MVOD_FRAME_FEW_FEATURES)
-		promote(vo, gt, false);
+		mvod_vo_promote(vo, gt, false);
 }
 
 void mvod_vo_restart(struct mvod_vo *vo)
@@ -272,6 +285,31 @@ void mvod_vo_restart(struct mvod_vo *vo)
 	vo->state = MVOD_STATE_INITIALIZING;
 	if (vo->klt)
 		mvod_klt_reset(vo->klt);
+	mvod_mapvo_reset(vo->mapvo);
+}
+
+/* Map mode's counts, which every frame reports. */
+static void map_counts(const struct mvod_vo *vo, struct mvod_vo_result *res)
+{
+	res->map_points = mvod_map_n_points(vo->mapvo->map);
+	res->keyframes = mvod_map_n_keyframes(vo->mapvo->map);
+}
+
+/*
+ * Map mode's tracking against the map: 1 when it took the frame (res filled), 0 when the
+ * two-view algorithm is to (no map yet, or just lost), -errno.
+ */
+static int map_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res,
+		     double t0)
+{
+	int ret = mvod_mapvo_track(vo, gt, res);
+	if (ret <= 0)
+		return ret;
+	map_counts(vo, res);
+	res->pose = vo->pose;
+	res->state = vo->state;
+	res->ms[MVOD_STAGE_POSE] = 1e3 * mvod_now_s() - t0;
+	return 1;
 }
 
 /*
@@ -281,6 +319,11 @@ void mvod_vo_restart(struct mvod_vo *vo)
 static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
 {
 	double t0 = 1e3 * mvod_now_s();
+	if (vo->mapvo) {
+		int handled = map_track(vo, gt, res, t0);
+		if (handled)
+			return handled < 0 ? handled : 0;
+	}
 	int n = vo->cur->f.n;
 	const struct frame_slot *tracked = vo->cur;
 	bool matched = false; /* enough matches against the reference to estimate motion */
@@ -302,9 +345,17 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 	double t1 = 1e3 * mvod_now_s();
 	if (matched)
 		res->status = mvod_twoview_estimate(vo, gt, res);
+	int made_map = vo->mapvo ? mvod_mapvo_init(vo, res) : 0;
+	if (made_map < 0)
+		return made_map;
 	settle(vo, gt, res);
 	if (vo->klt && vo->ref == tracked)
 		mvod_klt_promote(vo->klt);
+	/* Map mode: TRACKING means against a map; two-view frames only keep the pose going. */
+	if (vo->mapvo)
+		vo->state = made_map ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING;
+	if (vo->mapvo)
+		map_counts(vo, res);
 	res->pose = vo->pose;
 	res->state = vo->state;
 	res->ms[MVOD_STAGE_MATCH] = t1 - t0;

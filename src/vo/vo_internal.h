@@ -37,7 +37,14 @@ struct mvod_vo {
 	enum mvod_track_state state;
 	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
+	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
 };
+
+/*
+ * The current frame becomes the reference. Its structure (from a motion step) is what the next
+ * step scales against; without one, the next step falls back to constant speed.
+ */
+void mvod_vo_promote(struct mvod_vo *vo, const double *gt, bool with_structure);
 
 /*
  * Motion of the current slot against the reference from res->matches matches in

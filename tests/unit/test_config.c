@@ -49,6 +49,7 @@ static const char every_key[] =
 	"robust = ransac\n"
 	"ransac-px = 2.5\n"
 	"confidence = 0.99\n"
+	"mode = map\n"
 	"min-parallax = 3\n"
 	"resize = 0.5\n"
 	"blur = 5\n"
@@ -86,6 +87,7 @@ static void assert_every_key(const struct mvod_config *c)
 	assert_true(c->run.vo.ransac_px == 2.5);
 	assert_true(c->run.vo.ransac_conf == 0.99);
 	assert_true(c->run.vo.min_parallax_px == 3);
+	assert_int_equal(c->run.vo.mode, MVOD_VO_MAP);
 	assert_true(c->run.vo.resize == 0.5);
 	assert_int_equal(c->run.vo.blur_ksize, 5);
 	assert_false(c->lcm_enabled);
@@ -174,7 +176,7 @@ static void test_errors(void **state)
 	expect_error(WITH("[camera]\nuri = x\n"), "test.conf:4: [camera] uri: unknown section",
 		     NULL);
 	expect_error(WITH("[vo]\nfeatres = 100\n"), "test.conf:4: [vo] featres: unknown key",
-		     "[vo] has scale, frontend, detector, matcher, features");
+		     "[vo] has mode, scale, frontend, detector, matcher, features");
 	expect_error(WITH("[vo]\nfeatures = many\n"),
 		     "test.conf:4: [vo] features = many: expected an integer in [50, 100000]", NULL);
 	expect_error(WITH("[vo]\nfeatures = 12.5\n"), "test.conf:4: [vo] features", "an integer");

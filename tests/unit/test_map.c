@@ -258,6 +258,36 @@ static void test_representative_descriptor(void **state)
 	mvod_map_destroy(m);
 }
 
+/*
+ * Reset (map mode's loss of tracking): every keyframe and point leaves, even points with many
+ * observations that eviction alone would keep; old ids are stale; the pools are whole again.
+ */
+static void test_reset(void **state)
+{
+	(void)state;
+	struct mvod_map *m = new_map(3, 4);
+	mvod_map_id a = add_kf(m, NULL), b = add_kf(m, NULL);
+	mvod_map_id p = add_pt(m, a), q = add_pt(m, b);
+	assert_int_equal(mvod_map_add_obs(m, p, a, 0), 0);
+	assert_int_equal(mvod_map_add_obs(m, p, b, 0), 0);
+	mvod_map_reset(m);
+	assert_int_equal(mvod_map_check(m), 0);
+	assert_int_equal(mvod_map_n_keyframes(m), 0);
+	assert_int_equal(mvod_map_n_points(m), 0);
+	assert_null(mvod_map_keyframe(m, a));
+	assert_null(mvod_map_point(m, p));
+	assert_null(mvod_map_point(m, q));
+	/* All four point slots are free again, and the ring takes three keyframes. */
+	mvod_map_id k = add_kf(m, NULL);
+	for (int i = 0; i < 4; i++)
+		add_pt(m, k);
+	add_kf(m, NULL);
+	add_kf(m, NULL);
+	assert_int_equal(mvod_map_n_keyframes(m), 3);
+	assert_int_equal(mvod_map_check(m), 0);
+	mvod_map_destroy(m);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -269,6 +299,7 @@ int main(void)
 		cmocka_unit_test(test_eviction),
 		cmocka_unit_test(test_culling),
 		cmocka_unit_test(test_representative_descriptor),
+		cmocka_unit_test(test_reset),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

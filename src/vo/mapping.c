@@ -1,0 +1,369 @@
+/*
+ * Map mode's mapping: the first map from a two-view step, and on each keyframe: its
+ * observations, new points triangulated against the window, culling, windowed bundle
+ * adjustment.
+ */
+#include "mapvo.h"
+
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "motion.h"
+
+/* See mapvo.c: a two-view step builds the map from at least this many well-placed points. */
+#define INIT_MIN_POINTS 100
+/* Chi-square gate (2 dof, 95 %) on a reprojection error in sigma units, as the shims use. */
+#define CHI2_GATE 5.991
+/*
+ * A new point needs its two rays at least this far apart: cos 0.9998 = 1.15 deg, ORB-SLAM's
+ * cosParallaxRays gate; smaller angles put the depth anywhere along the ray.
+ */
+#define MAX_COS_PARALLAX 0.9998
+/* Keyframes before the new one that it triangulates against (the descriptor table each). */
+#define TRIANGULATE_WITH 3
+/* Bundle adjustment's Levenberg-Marquardt iterations per keyframe. */
+#define BA_ITERATIONS 5
+
+/* World point X seen by keypoint kp from camera-from-world R, t: within the gate, in front. */
+static bool reprojects(const double K[4], const double R[9], const double t[3],
+		       const double X[3], const struct mvod_map_kp *kp)
+{
+	double c[3];
+	mvod_mat3_vec(R, X, c);
+	double z = c[2] + t[2];
+	if (!(z > 0))
+		return false;
+	double s = mvod_mapvo_sigma(kp->octave);
+	double du = (K[0] * (c[0] + t[0]) / z + K[2] - kp->x) / s;
+	double dv = (K[1] * (c[1] + t[1]) / z + K[3] - kp->y) / s;
+	return du * du + dv * dv <= CHI2_GATE;
+}
+
+/* Adds the frame of slot k, at camera-to-world pose c2w, as a keyframe. */
+static int add_frame_kf(struct mvod_mapvo *mv, const struct frame_slot *k,
+			const struct mvod_pose *c2w, mvod_map_id *out)
+{
+	struct mvod_pose w2c;
+	mvod_pose_inverse(c2w, &w2c);
+	for (int i = 0; i < k->f.n; i++)
+		mv->kp[i] = (struct mvod_map_kp){k->f.kp[i].x, k->f.kp[i].y, k->f.kp[i].response,
+						 k->f.kp[i].octave};
+	struct mvod_map_kf_in in = {0};
+	memcpy(in.Rcw, w2c.R, sizeof(in.Rcw));
+	memcpy(in.tcw, w2c.t, sizeof(in.tcw));
+	in.n = k->f.n;
+	in.kp = mv->kp;
+	in.desc = k->f.desc;
+	return mvod_map_add_keyframe(mv->map, &in, out, NULL);
+}
+
+/* A new point at world X seen by keypoint ja of keyframe a and jb of b. */
+static int add_point(struct mvod_mapvo *mv, const double X[3], mvod_map_id a, int ja,
+		     mvod_map_id b, int jb, mvod_map_id *out)
+{
+	const struct mvod_map_keyframe *kb = mvod_map_keyframe(mv->map, b);
+	int ret = mvod_map_add_point(mv->map, X, kb->desc + (size_t)jb * MVOD_MAP_DESC_BYTES, b,
+				     out);
+	if (!ret)
+		ret = mvod_map_add_obs(mv->map, *out, a, ja);
+	if (!ret)
+		ret = mvod_map_add_obs(mv->map, *out, b, jb);
+	return ret;
+}
+
+/* The two-view step's structure (in vo->cur's camera) as points of keyframes a and b. */
+static int init_points(struct mvod_vo *vo, int n, mvod_map_id a, mvod_map_id b)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	const struct mvod_map_keyframe *ka = mvod_map_keyframe(mv->map, a);
+	const struct mvod_map_keyframe *kb = mvod_map_keyframe(mv->map, b);
+	int made = 0;
+	for (int j = 0; j < vo->cur->f.n; j++)
+		mv->ref_pt[j] = MVOD_MAP_NONE; /* the current frame is about to be the reference */
+	for (int i = 0; i < n; i++) {
+		int ia = vo->matches[i].a, ib = vo->matches[i].b;
+		if (!vo->cur->has_pt[ib])
+			continue;
+		double X[3];
+		mvod_mat3_vec(vo->pose.R, vo->cur->pts + 3 * ib, X);
+		for (int k = 0; k < 3; k++)
+			X[k] += vo->pose.t[k];
+		if (!reprojects(mv->K, ka->Rcw, ka->tcw, X, &ka->kp[ia]) ||
+		    !reprojects(mv->K, kb->Rcw, kb->tcw, X, &kb->kp[ib]))
+			continue;
+		int ret = add_point(mv, X, a, ia, b, ib, &mv->ref_pt[ib]);
+		if (ret == -ENOSPC)
+			break;
+		if (ret)
+			return ret;
+		made++;
+	}
+	return made;
+}
+
+/* The tracking state once a map exists: the last frame b and the step that led to it. */
+static void start_tracking(struct mvod_mapvo *mv, mvod_map_id a, mvod_map_id b)
+{
+	const struct mvod_map_keyframe *ka = mvod_map_keyframe(mv->map, a);
+	const struct mvod_map_keyframe *kb = mvod_map_keyframe(mv->map, b);
+	double v[3];
+	memcpy(mv->Rcw, kb->Rcw, sizeof(mv->Rcw));
+	memcpy(mv->tcw, kb->tcw, sizeof(mv->tcw));
+	mvod_mat3_mul_bt(kb->Rcw, ka->Rcw, mv->vR);
+	mvod_mat3_vec(mv->vR, ka->tcw, v);
+	for (int k = 0; k < 3; k++)
+		mv->vt[k] = kb->tcw[k] - v[k];
+	mv->since_kf = 0;
+	mv->kf_tracked = mvod_map_n_points(mv->map);
+	mv->active = true;
+}
+
+/*
+ * The first map waits for parallax: a step with too few well-triangulated points keeps only
+ * its rotation (as a rotation-only frame does), so the reference stays and the baseline grows.
+ */
+static void hold_translation(struct mvod_vo *vo, struct mvod_vo_result *res)
+{
+	struct mvod_pose inv, rel;
+	mvod_pose_inverse(&vo->ref->pose, &inv);
+	mvod_pose_compose(&inv, &vo->pose, &rel);
+	memset(rel.t, 0, sizeof(rel.t));
+	mvod_pose_compose(&vo->ref->pose, &rel, &vo->pose);
+	res->status = MVOD_FRAME_ROTATION;
+	res->scale_source = MVOD_SCALE_NONE;
+	res->step_m = 0;
+	vo->have_step = 0; /* the map's first step is still to define the unit */
+}
+
+int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	int n = res->matches, good = 0;
+	if (res->status != MVOD_FRAME_MOTION)
+		return 0;
+	for (int i = 0; i < n; i++)
+		good += vo->cur->has_pt[vo->matches[i].b];
+	if (good < INIT_MIN_POINTS) {
+		if (!mv->had_map)
+			hold_translation(vo, res);
+		return 0;
+	}
+	mvod_map_reset(mv->map);
+	mvod_map_id a, b;
+	int ret = add_frame_kf(mv, vo->ref, &vo->ref->pose, &a);
+	if (!ret)
+		ret = add_frame_kf(mv, vo->cur, &vo->pose, &b);
+	if (!ret)
+		ret = init_points(vo, n, a, b);
+	if (ret < INIT_MIN_POINTS) {
+		mvod_map_reset(mv->map);
+		return ret < 0 ? ret : 0;
+	}
+	ret = mvod_mapping_ba(mv);
+	if (ret)
+		return ret;
+	start_tracking(mv, a, b);
+	mv->had_map = true;
+	res->keyframe = true;
+	return 1;
+}
+
+static void unmatched(const struct mvod_map_keyframe *k, struct mvod_features *f, int *idx)
+{
+	f->n = 0;
+	for (int j = 0; j < k->n; j++) {
+		if (k->pt[j] != MVOD_MAP_NONE)
+			continue;
+		f->kp[f->n] = (struct mvod_keypoint){k->kp[j].x, k->kp[j].y, k->kp[j].octave,
+						     k->kp[j].response};
+		memcpy(f->desc + (size_t)f->n * MVOD_MAP_DESC_BYTES,
+		       k->desc + (size_t)j * MVOD_MAP_DESC_BYTES, MVOD_MAP_DESC_BYTES);
+		idx[f->n++] = j;
+	}
+}
+
+/* World ray (unnormalised) of keypoint kp in camera-from-world R. */
+static void ray(const double K[4], const double R[9], const struct mvod_map_kp *kp, double r[3],
+		double x[2])
+{
+	x[0] = (kp->x - K[2]) / K[0];
+	x[1] = (kp->y - K[3]) / K[1];
+	double c[3] = {x[0], x[1], 1};
+	mvod_mat3_tvec(R, c, r);
+}
+
+/*
+ * Triangulates keypoint ja of A with jb of B (midpoint, A to B motion R, t): true with world
+ * X when the rays are far enough apart, the point in front of both and within the gate in both.
+ */
+static bool triangulate(const struct mvod_mapvo *mv, const struct mvod_map_keyframe *A,
+			const struct mvod_map_keyframe *B, const double R[9], const double t[3],
+			int ja, int jb, double X[3])
+{
+	double ra[3], rb[3], x1[2], x2[2], d1, d2;
+	ray(mv->K, A->Rcw, &A->kp[ja], ra, x1);
+	ray(mv->K, B->Rcw, &B->kp[jb], rb, x2);
+	if (cos(mvod_vec3_angle(ra, rb)) > MAX_COS_PARALLAX ||
+	    !mvod_triangulate_midpoint(R, t, x1, x2, &d1, &d2) || !(d1 > 0) || !(d2 > 0))
+		return false;
+	/* The midpoint of the two rays' closest points, in the world. */
+	double ca[3] = {x1[0] * d1 - A->tcw[0], x1[1] * d1 - A->tcw[1], d1 - A->tcw[2]};
+	double cb[3] = {x2[0] * d2 - B->tcw[0], x2[1] * d2 - B->tcw[1], d2 - B->tcw[2]}, Xb[3];
+	mvod_mat3_tvec(A->Rcw, ca, X);
+	mvod_mat3_tvec(B->Rcw, cb, Xb);
+	for (int k = 0; k < 3; k++)
+		X[k] = 0.5 * (X[k] + Xb[k]);
+	return reprojects(mv->K, A->Rcw, A->tcw, X, &A->kp[ja]) &&
+	       reprojects(mv->K, B->Rcw, B->tcw, X, &B->kp[jb]);
+}
+
+/* New points from the unmatched keypoints of keyframes a (older) and b (the new one). */
+static int triangulate_pair(struct mvod_vo *vo, mvod_map_id a, mvod_map_id b)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	const struct mvod_map_keyframe *A = mvod_map_keyframe(mv->map, a);
+	const struct mvod_map_keyframe *B = mvod_map_keyframe(mv->map, b);
+	unmatched(A, &mv->fa, mv->ia);
+	unmatched(B, &mv->fb, mv->ib);
+	int nm, ret = mvod_match(vo->matcher, &mv->fa, &mv->fb, vo->matches, vo->cap, &nm);
+	if (ret)
+		return ret;
+	double R[9], t[3], v[3];
+	mvod_mat3_mul_bt(B->Rcw, A->Rcw, R);
+	mvod_mat3_vec(R, A->tcw, v);
+	for (int k = 0; k < 3; k++)
+		t[k] = B->tcw[k] - v[k];
+	for (int i = 0; i < nm; i++) {
+		int ja = mv->ia[vo->matches[i].a], jb = mv->ib[vo->matches[i].b];
+		double X[3];
+		mvod_map_id id;
+		if (!triangulate(mv, A, B, R, t, ja, jb, X))
+			continue;
+		ret = add_point(mv, X, a, ja, b, jb, &id);
+		if (ret == -ENOSPC)
+			return 0;
+		if (ret)
+			return ret;
+	}
+	return 0;
+}
+
+/* The current frame's tracked points become the new keyframe's observations. */
+static int observe(struct mvod_mapvo *mv, mvod_map_id kf, int n)
+{
+	int k = 0;
+	for (int j = 0; j < n; j++) {
+		/* A point the eviction just erased is stale: its add_obs fails, nothing changes. */
+		if (mvod_map_add_obs(mv->map, mv->cur_pt[j], kf, j) == 0)
+			k += mvod_map_update_desc(mv->map, mv->cur_pt[j]) == 0;
+		else
+			mv->cur_pt[j] = MVOD_MAP_NONE;
+	}
+	return k;
+}
+
+int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	struct mvod_pose c2w = {0};
+	memcpy(c2w.R, mv->Rcw, sizeof(c2w.R));
+	memcpy(c2w.t, mv->tcw, sizeof(c2w.t));
+	mvod_pose_inverse(&c2w, &c2w);
+	mvod_map_id kf;
+	int ret = add_frame_kf(mv, vo->cur, &c2w, &kf);
+	if (ret)
+		return ret;
+	mv->kf_tracked = observe(mv, kf, vo->cur->f.n);
+	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap);
+	/* The widest baseline first: its points are the best placed; nearer ones fill in. */
+	for (int i = nk - 1 - TRIANGULATE_WITH < 0 ? 0 : nk - 1 - TRIANGULATE_WITH; i < nk - 1; i++) {
+		ret = triangulate_pair(vo, mv->kfs[i], kf);
+		if (ret)
+			return ret;
+	}
+	mvod_map_cull(mv->map, NULL);
+	ret = mvod_mapping_ba(mv);
+	if (ret)
+		return ret;
+	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);
+	memcpy(mv->Rcw, k->Rcw, sizeof(mv->Rcw));
+	memcpy(mv->tcw, k->tcw, sizeof(mv->tcw));
+	for (int j = 0; j < k->n; j++)
+		mv->cur_pt[j] = k->pt[j];
+	mv->since_kf = 0;
+	*added = true;
+	return 0;
+}
+
+/* Index of kf among the window's keyframes (mv->kfs, nk of them), or -1. */
+static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
+{
+	for (int i = 0; i < nk; i++)
+		if (mv->kfs[i] == kf)
+			return i;
+	return -1;
+}
+
+/* The window's problem: poses of the nk keyframes, points seen twice or more, observations. */
+static void ba_build(struct mvod_mapvo *mv, int nk, struct mvod_ba_problem *p)
+{
+	for (int i = 0; i < nk; i++) {
+		const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, mv->kfs[i]);
+		mvod_rot_log(k->Rcw, mv->ba_poses + 6 * i);
+		memcpy(mv->ba_poses + 6 * i + 3, k->tcw, sizeof(k->tcw));
+		mv->ba_fixed[i] = i < 2; /* the gauge: position, orientation and scale */
+	}
+	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), nb = 0, no = 0;
+	for (int i = 0; i < np; i++) {
+		const struct mvod_map_point *pt = mvod_map_point(mv->map, mv->ids[i]);
+		if (pt->n_obs < 2)
+			continue;
+		for (int o = 0; o < pt->n_obs; o++) {
+			const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, pt->obs[o].kf);
+			const struct mvod_map_kp *kp = &k->kp[pt->obs[o].kp];
+			mv->ba_obs[no] = (struct mvod_ba_obs){kf_index(mv, nk, pt->obs[o].kf), nb,
+							      kp->x, kp->y,
+							      mvod_mapvo_sigma(kp->octave)};
+			mv->ba_obs_kf[no++] = pt->obs[o].kf;
+		}
+		memcpy(mv->ba_points + 3 * nb, pt->pos, sizeof(pt->pos));
+		mv->ids[nb++] = mv->ids[i]; /* ids[] now names the problem's points */
+	}
+	*p = (struct mvod_ba_problem){nk, nb, no, mv->ba_poses, mv->ba_points, mv->ba_fixed,
+				      mv->ba_obs, mv->ba_out, mv->K[0], mv->K[1], mv->K[2],
+				      mv->K[3]};
+}
+
+/* The solution back into the map; outlying observations leave their points. */
+static void ba_write(struct mvod_mapvo *mv, const struct mvod_ba_problem *p)
+{
+	for (int i = 0; i < p->n_poses; i++) {
+		double R[9];
+		mvod_rot_exp(mv->ba_poses + 6 * i, R);
+		mvod_map_set_pose(mv->map, mv->kfs[i], R, mv->ba_poses + 6 * i + 3);
+	}
+	for (int i = 0; i < p->n_points; i++)
+		mvod_map_set_point(mv->map, mv->ids[i], mv->ba_points + 3 * i);
+	for (int o = 0; o < p->n_obs; o++)
+		if (mv->ba_out[o])
+			mvod_map_remove_obs(mv->map, mv->ids[mv->ba_obs[o].point], mv->ba_obs_kf[o]);
+}
+
+int mvod_mapping_ba(struct mvod_mapvo *mv)
+{
+	if (!mv->ba)
+		return 0;
+	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap);
+	struct mvod_ba_problem p;
+	ba_build(mv, nk, &p);
+	struct mvod_ba_options o;
+	mvod_ba_options_default(&o);
+	o.max_iterations = BA_ITERATIONS;
+	struct mvod_ba_result r;
+	int ret = mvod_ba_solve(mv->ba, &p, &o, &r);
+	if (ret)
+		return ret;
+	ba_write(mv, &p);
+	return 0;
+}

@@ -1,0 +1,344 @@
+/*
+ * Map mode's tracking: the map built from a two-view step, then per frame a constant-velocity
+ * prediction, matching of the map's points by projection, a pose-only refinement, and, when
+ * the prediction fails, PnP-RANSAC on descriptor matches against the reference frame.
+ */
+#include "mapvo.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+
+/*
+ * A frame becomes a keyframe when it tracks fewer than this share of the points the last
+ * keyframe observes: ORB-SLAM's monocular thRefRatio. A camera standing still keeps tracking
+ * them all, so it makes no keyframes (and triangulates nothing from a zero baseline).
+ */
+#define KF_SHARE 0.9
+/* Chi-square gate (2 dof, 95 %) on a reprojection error in sigma units, as the shims use. */
+double mvod_mapvo_sigma(int octave)
+{
+	return pow(1.2, octave);
+}
+
+static int alloc_arrays(struct mvod_mapvo *mv)
+{
+	size_t c = (size_t)mv->cap, np = (size_t)mv->mp.point_cap, nk = (size_t)mv->mp.kf_cap;
+	mv->kp = calloc(c, sizeof(*mv->kp));
+	mv->cur_pt = calloc(c, sizeof(*mv->cur_pt));
+	mv->ref_pt = calloc(c, sizeof(*mv->ref_pt));
+	mv->ids = calloc(np, sizeof(*mv->ids));
+	mv->pos = calloc(np * 3, sizeof(double));
+	mv->desc = calloc(np, MVOD_MAP_DESC_BYTES);
+	mv->match = calloc(np, sizeof(int));
+	mv->X = calloc(c * 3, sizeof(double));
+	mv->uv = calloc(c * 2, sizeof(double));
+	mv->sigma = calloc(c, sizeof(double));
+	mv->pidx = calloc(c, sizeof(int));
+	mv->inlier = calloc(c, 1);
+	mv->fa.kp = calloc(c, sizeof(*mv->fa.kp));
+	mv->fb.kp = calloc(c, sizeof(*mv->fb.kp));
+	mv->fa.desc = calloc(c, MVOD_MAP_DESC_BYTES);
+	mv->fb.desc = calloc(c, MVOD_MAP_DESC_BYTES);
+	mv->ia = calloc(c, sizeof(int));
+	mv->ib = calloc(c, sizeof(int));
+	mv->ba_poses = calloc(nk * 6, sizeof(double));
+	mv->ba_points = calloc(np * 3, sizeof(double));
+	mv->ba_fixed = calloc(nk, 1);
+	mv->ba_obs = calloc(np * nk, sizeof(*mv->ba_obs));
+	mv->ba_obs_kf = calloc(np * nk, sizeof(*mv->ba_obs_kf));
+	mv->ba_out = calloc(np * nk, 1);
+	mv->kfs = calloc(nk, sizeof(*mv->kfs));
+	mv->fa.cap = mv->fb.cap = mv->cap;
+	mv->fa.desc_bytes = mv->fb.desc_bytes = MVOD_MAP_DESC_BYTES;
+	bool ok = mv->kp && mv->cur_pt && mv->ref_pt && mv->ids && mv->pos && mv->desc &&
+		  mv->match && mv->X && mv->uv && mv->sigma && mv->pidx && mv->inlier &&
+		  mv->fa.kp && mv->fb.kp && mv->fa.desc && mv->fb.desc && mv->ia && mv->ib &&
+		  mv->ba_poses && mv->ba_points && mv->ba_fixed && mv->ba_obs && mv->ba_obs_kf &&
+		  mv->ba_out && mv->kfs;
+	return ok ? 0 : -ENOMEM;
+}
+
+/* The shims' own parameters for map mode. */
+static int create_parts(const struct mvod_vo *vo, struct mvod_mapvo *mv)
+{
+	struct mvod_pm_params pp;
+	mvod_pm_params_default(&pp);
+	int ret = mvod_pm_create(&pp, vo->cam.width, vo->cam.height, vo->cap, &mv->pm);
+	if (ret)
+		return ret;
+	struct mvod_pnp_params np;
+	mvod_pnp_params_default(&np);
+	np.min_inliers = vo->p.min_inliers;
+	ret = mvod_pnp_create(&np, vo->cap, &mv->pnp);
+	if (ret)
+		return ret;
+	ret = mvod_ba_create(&mv->ba);
+	return ret == -ENOTSUP ? 0 : ret; /* without Ceres: no window refinement */
+}
+
+int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)
+{
+	*out = NULL;
+	if (vo->p.detector != MVOD_DETECTOR_ORB)
+		return -EINVAL;
+	struct mvod_mapvo *mv = calloc(1, sizeof(*mv));
+	if (!mv)
+		return -ENOMEM;
+	mv->cap = vo->cap;
+	mvod_map_params_default(&mv->mp);
+	mv->mp.kp_cap = vo->cap;
+	mv->K[0] = vo->cam.fx, mv->K[1] = vo->cam.fy, mv->K[2] = vo->cam.cx, mv->K[3] = vo->cam.cy;
+	int ret = mvod_map_create(&mv->map, &mv->mp);
+	if (!ret)
+		ret = create_parts(vo, mv);
+	if (!ret)
+		ret = alloc_arrays(mv);
+	if (ret) {
+		mvod_mapvo_destroy(mv);
+		return ret;
+	}
+	*out = mv;
+	return 0;
+}
+
+void mvod_mapvo_destroy(struct mvod_mapvo *mv)
+{
+	if (!mv)
+		return;
+	mvod_map_destroy(mv->map);
+	mvod_pm_destroy(mv->pm);
+	mvod_pnp_destroy(mv->pnp);
+	mvod_ba_destroy(mv->ba);
+	void *arrays[] = {mv->kp, mv->cur_pt, mv->ref_pt, mv->ids, mv->pos, mv->desc, mv->match,
+			  mv->X, mv->uv, mv->sigma, mv->pidx, mv->inlier, mv->fa.kp, mv->fb.kp,
+			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->ba_poses, mv->ba_points,
+			  mv->ba_fixed, mv->ba_obs, mv->ba_obs_kf, mv->ba_out, mv->kfs};
+	for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++)
+		free(arrays[i]);
+	free(mv);
+}
+
+void mvod_mapvo_reset(struct mvod_mapvo *mv)
+{
+	if (!mv)
+		return;
+	mvod_map_reset(mv->map);
+	mv->active = false;
+}
+
+/* The VO's keypoints in the map's form. */
+static void to_map_kp(const struct mvod_features *f, struct mvod_map_kp *out)
+{
+	for (int i = 0; i < f->n; i++)
+		out[i] = (struct mvod_map_kp){f->kp[i].x, f->kp[i].y, f->kp[i].response,
+					      f->kp[i].octave};
+}
+
+/* Every point of the map (all are the window's): ids, positions, descriptors. */
+static int gather(struct mvod_mapvo *mv)
+{
+	int n = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap);
+	for (int i = 0; i < n; i++) {
+		const struct mvod_map_point *p = mvod_map_point(mv->map, mv->ids[i]);
+		memcpy(mv->pos + 3 * i, p->pos, sizeof(p->pos));
+		memcpy(mv->desc + (size_t)i * MVOD_MAP_DESC_BYTES, p->desc, MVOD_MAP_DESC_BYTES);
+	}
+	return n;
+}
+
+/* One 2D-3D pair for PnP: world point X, keypoint kp; returns the new count. */
+static int add_pair(struct mvod_mapvo *mv, int k, const double X[3], const struct mvod_map_kp *kp,
+		    int local)
+{
+	memcpy(mv->X + 3 * k, X, 3 * sizeof(double));
+	mv->uv[2 * k] = kp->x;
+	mv->uv[2 * k + 1] = kp->y;
+	mv->sigma[k] = mvod_mapvo_sigma(kp->octave);
+	mv->pidx[k] = local;
+	return k + 1;
+}
+
+/*
+ * The np gathered points matched by projection from pose R, t, then the pose refined on them
+ * (R, t in and out). Returns the inliers, or a negative errno when too few.
+ */
+static int track_projection(struct mvod_mapvo *mv, int np, double R[9], double t[3])
+{
+	int m = mvod_pm_match(mv->pm, R, t, mv->K, mv->pos, mv->desc, np, mv->match, NULL);
+	if (m < 4)
+		return -ENODATA;
+	int k = 0;
+	for (int i = 0; i < np; i++)
+		if (mv->match[i] >= 0)
+			k = add_pair(mv, k, mv->pos + 3 * i, &mv->kp[mv->match[i]], i);
+	mv->n_pairs = k;
+	return mvod_pnp_refine(mv->pnp, mv->X, mv->uv, mv->sigma, k, mv->K, R, t, mv->inlier);
+}
+
+/*
+ * Re-finding: the current frame's descriptors against the reference frame's, whose keypoints
+ * know their map points; PnP-RANSAC on those pairs, then tracking by projection from there.
+ */
+static int refind(struct mvod_vo *vo, int np, double R[9], double t[3],
+		  struct mvod_vo_result *res)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	int ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches, vo->cap,
+			     &res->matches);
+	if (ret)
+		return ret;
+	int k = 0;
+	for (int i = 0; i < res->matches; i++) {
+		const struct mvod_map_point *p = mvod_map_point(mv->map, mv->ref_pt[vo->matches[i].a]);
+		if (p)
+			k = add_pair(mv, k, p->pos, &mv->kp[vo->matches[i].b], -1);
+	}
+	if (k < vo->p.min_inliers)
+		return -ENODATA;
+	ret = mvod_pnp_solve(mv->pnp, mv->X, mv->uv, mv->sigma, k, mv->K, R, t, mv->inlier);
+	return ret < 0 ? ret : track_projection(mv, np, R, t);
+}
+
+/* The frame's tracked points (PnP inliers) and the culling counters of the np gathered. */
+static void mark_tracked(struct mvod_mapvo *mv, int n_kp, int np, int k)
+{
+	for (int j = 0; j < n_kp; j++)
+		mv->cur_pt[j] = MVOD_MAP_NONE;
+	for (int i = 0; i < np; i++)
+		if (mv->match[i] != MVOD_PM_OUT_OF_VIEW)
+			mvod_map_count(mv->map, mv->ids[i], 1, 0);
+	for (int i = 0; i < k; i++) {
+		if (!mv->inlier[i])
+			continue;
+		int local = mv->pidx[i];
+		mv->cur_pt[mv->match[local]] = mv->ids[local];
+		mvod_map_count(mv->map, mv->ids[local], 0, 1);
+	}
+}
+
+/*
+ * The published pose from the map's camera-from-world R, t: its inverse (measured on KITTI 07:
+ * scale drift 1.38, where composing the map's steps instead, which hides a keyframe's
+ * correction by bundle adjustment, drifted 1.88). With --scale gt, the map's step from the
+ * last frame (Rcw, tcw) with its length from the ground truth, as the two-view steps are (what
+ * the reference implementation's evaluation compares).
+ */
+static void publish(struct mvod_vo *vo, const double R[9], const double t[3], const double *gt)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	struct mvod_pose cur = {0}, prev = {0}, rel;
+	memcpy(cur.R, R, sizeof(cur.R));
+	memcpy(cur.t, t, sizeof(cur.t));
+	mvod_pose_inverse(&cur, &cur);
+	if (vo->p.scale_mode != MVOD_SCALE_MODE_GT) {
+		vo->pose = cur;
+		return;
+	}
+	memcpy(prev.R, mv->Rcw, sizeof(prev.R));
+	memcpy(prev.t, mv->tcw, sizeof(prev.t));
+	mvod_pose_compose(&prev, &cur, &rel); /* previous camera from current camera */
+	double len = mvod_vec3_norm(rel.t), want = mvod_vec3_dist(gt, vo->ref->gt);
+	for (int k = 0; k < 3; k++)
+		rel.t[k] = len > 0 ? rel.t[k] * want / len : 0;
+	mvod_pose_compose(&vo->pose, &rel, &vo->pose);
+}
+
+/* Velocity (the motion from the last frame to this one), then this frame's pose. */
+static void set_pose(struct mvod_mapvo *mv, const double R[9], const double t[3])
+{
+	double v[3];
+	mvod_mat3_mul_bt(R, mv->Rcw, mv->vR);
+	mvod_mat3_vec(mv->vR, mv->tcw, v);
+	for (int k = 0; k < 3; k++)
+		mv->vt[k] = t[k] - v[k];
+	memcpy(mv->Rcw, R, sizeof(mv->Rcw));
+	memcpy(mv->tcw, t, sizeof(mv->tcw));
+}
+
+/* The tracked frame becomes the reference; the point ids of its keypoints go with it. */
+static void promote_tracked(struct mvod_vo *vo, const double *gt)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	mvod_map_id *k = mv->ref_pt;
+	mv->ref_pt = mv->cur_pt;
+	mv->cur_pt = k;
+	mvod_vo_promote(vo, gt, false);
+}
+
+/* A frame tracked with k PnP pairs (inlier[] set): counters, pose, keyframe, result. */
+static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const double t[3],
+		  const double *gt, struct mvod_vo_result *res)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	int inliers = 0;
+	for (int i = 0; i < k; i++)
+		inliers += mv->inlier[i];
+	mark_tracked(mv, vo->cur->f.n, np, k);
+	struct mvod_pose before = vo->pose;
+	publish(vo, R, t, gt);
+	set_pose(mv, R, t);
+	mv->since_kf++;
+	if (inliers < KF_SHARE * mv->kf_tracked) {
+		int ret = mvod_mapping_keyframe(vo, &res->keyframe);
+		if (ret)
+			return ret;
+	}
+	res->status = MVOD_FRAME_MOTION;
+	if (!res->matches) /* re-finding reports its descriptor matches */
+		res->matches = k;
+	res->inliers = inliers;
+	res->scale_source = vo->p.scale_mode == MVOD_SCALE_MODE_GT ? MVOD_SCALE_GROUND_TRUTH
+								   : MVOD_SCALE_MAP;
+	res->step_m = mvod_vec3_dist(before.t, vo->pose.t);
+	if (res->step_m > 0) {
+		vo->last_step = res->step_m; /* the scale a re-initialisation carries */
+		vo->have_step = 1;
+	}
+	vo->state = MVOD_STATE_TRACKING;
+	promote_tracked(vo, gt);
+	return 0;
+}
+
+/* Constant velocity: this frame's camera-from-world predicted from the last two. */
+static void predict(const struct mvod_mapvo *mv, double R[9], double t[3])
+{
+	double v[3];
+	mvod_mat3_mul(mv->vR, mv->Rcw, R);
+	mvod_mat3_vec(mv->vR, mv->tcw, v);
+	for (int k = 0; k < 3; k++)
+		t[k] = v[k] + mv->vt[k];
+}
+
+int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	const struct mvod_features *f = &vo->cur->f;
+	if (!mv->active)
+		return 0;
+	res->features = f->n;
+	if (f->n < vo->p.min_matches) { /* black or textureless: hold the pose and the map */
+		res->status = MVOD_FRAME_FEW_FEATURES;
+		vo->state = MVOD_STATE_LOST;
+		return 1;
+	}
+	to_map_kp(f, mv->kp);
+	int ret = mvod_pm_set_frame(mv->pm, mv->kp, f->desc, f->n);
+	if (ret)
+		return ret;
+	int np = gather(mv);
+	double R[9], t[3];
+	predict(mv, R, t);
+	int k = track_projection(mv, np, R, t);
+	if (k < vo->p.min_matches)
+		k = refind(vo, np, R, t, res);
+	if (k < vo->p.min_matches) {
+		/* Lost: the two-view algorithm takes this frame from the reference. */
+		mvod_mapvo_reset(mv);
+		return 0;
+	}
+	ret = accept(vo, np, mv->n_pairs, R, t, gt, res);
+	return ret ? ret : 1;
+}

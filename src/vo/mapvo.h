@@ -1,0 +1,97 @@
+/*
+ * Map mode (--mode map): tracking against a local map of keyframes and points.
+ *
+ * Until a map exists (and again after the map is lost) frames go through the two-view
+ * algorithm, which keeps the pose chain going; the first two-view MOTION step with enough
+ * well-triangulated points builds the map from its two frames, so the map's unit is that step's
+ * length (the unit, the ground truth's with --scale gt, or the last speed after a loss: the
+ * scale carries over). From then on each frame's pose comes from the map (mapvo.c: predict,
+ * match by projection, pose-only refinement, PnP-RANSAC to re-find) and some frames become
+ * keyframes (mapping.c: triangulation against the window, culling, windowed BA).
+ *
+ * Everything is allocated at create; nothing per frame.
+ */
+#ifndef MVOD_MAPVO_H
+#define MVOD_MAPVO_H
+
+#include <stdbool.h>
+
+#include "ba_shim.h"
+#include "map.h"
+#include "pnp_shim.h"
+#include "project_match.h"
+#include "vo_internal.h"
+
+struct mvod_mapvo {
+	struct mvod_map *map;
+	struct mvod_map_params mp;
+	struct mvod_pm *pm;
+	struct mvod_pnp *pnp;
+	struct mvod_ba *ba; /* NULL without Ceres: the window is not refined */
+	int cap;            /* keypoints per frame (the VO's cap) */
+	double K[4];        /* fx, fy, cx, cy of the preprocessed image */
+	/* The current frame, in the map's form: keypoints, and the point each one tracks. */
+	struct mvod_map_kp *kp;  /* [cap] */
+	mvod_map_id *cur_pt;     /* [cap] */
+	mvod_map_id *ref_pt;     /* [cap] the same for the reference frame (vo->ref) */
+	/* The map's points gathered for a frame: ids, positions, descriptors, matches. */
+	mvod_map_id *ids; /* [point_cap] */
+	double *pos;      /* [point_cap * 3] */
+	uint8_t *desc;    /* [point_cap * 32] */
+	int *match;       /* [point_cap] */
+	/* 2D-3D pairs for PnP: world point, pixel, sigma, and the local point index. */
+	double *X, *uv, *sigma; /* [cap * 3], [cap * 2], [cap] */
+	int *pidx;              /* [cap] */
+	int n_pairs;            /* pairs of the last tracking by projection */
+	uint8_t *inlier;        /* [cap] */
+	/* Triangulation: the unmatched keypoints of two keyframes as feature sets. */
+	struct mvod_features fa, fb;
+	int *ia, *ib; /* [cap] keypoint index in the keyframe of each entry of fa, fb */
+	/* Bundle adjustment: the window's problem. */
+	double *ba_poses, *ba_points; /* [kf_cap * 6], [point_cap * 3] */
+	uint8_t *ba_fixed;            /* [kf_cap] */
+	struct mvod_ba_obs *ba_obs;   /* [point_cap * kf_cap] */
+	mvod_map_id *ba_obs_kf;       /* [point_cap * kf_cap] keyframe of each observation */
+	uint8_t *ba_out;              /* [point_cap * kf_cap] */
+	mvod_map_id *kfs;             /* [kf_cap] */
+	/* State. */
+	bool active;           /* a map exists and the last frames tracked against it */
+	bool had_map;          /* a map existed: later ones carry its scale (the last speed) */
+	double Rcw[9], tcw[3]; /* the last tracked frame, camera from world */
+	double vR[9], vt[3];   /* its motion from the frame before (constant-velocity model) */
+	int since_kf;          /* frames since the last keyframe */
+	int kf_tracked;        /* points tracked into the last keyframe (before it triangulated) */
+};
+
+/* For the VO's camera (vo->cam) and feature cap (vo->cap); ORB only (-EINVAL otherwise). */
+int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out);
+void mvod_mapvo_destroy(struct mvod_mapvo *mv);
+
+/* Forgets the map (a gap in the frames, or tracking lost): two-view until a new one is made. */
+void mvod_mapvo_reset(struct mvod_mapvo *mv);
+
+/*
+ * Tracks the current slot against the map when one is active. Returns 1 when the frame was
+ * handled (res filled: pose, status, state); 0 when there is no map or it was just lost (the
+ * map is reset, and the caller runs the two-view algorithm from the reference frame, whose
+ * scale falls back to the last step: the pose does not jump); -errno on a real failure.
+ */
+int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res);
+
+/*
+ * After a two-view estimate, before the frame settles: when it was a MOTION step with enough
+ * well-triangulated points, builds the map from the step's two frames (vo->ref and vo->cur,
+ * at vo->pose) and returns 1; else 0. Before the first map, a MOTION step without enough
+ * becomes a rotation-only frame (translation held) so that parallax builds up.
+ */
+int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
+
+/* Mapping (mapping.c): the current frame, tracked at mv->Rcw, tcw, becomes a keyframe. */
+int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added);
+/* Windowed bundle adjustment: the two oldest keyframes held (the gauge: position and scale). */
+int mvod_mapping_ba(struct mvod_mapvo *mv);
+
+/* Pixel sigma of a keypoint on pyramid level octave: ORB's scale step 1.2 per level. */
+double mvod_mapvo_sigma(int octave);
+
+#endif
