@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "mvod_pose_t.h"
+#include "mvod_speed_t.h"
 #include "mvod_status_t.h"
 
 static const struct {
@@ -15,6 +16,7 @@ static const struct {
 } types[] = {
 	{"mvod.pose_t", __mvod_pose_t_get_hash},
 	{"mvod.status_t", __mvod_status_t_get_hash},
+	{"mvod.speed_t", __mvod_speed_t_get_hash},
 };
 
 int main(void)

@@ -68,6 +68,12 @@ struct mvod_run_opts {
 	/* Set (by SIGHUP) to have the run reopen its trajectory by name; cleared when done. */
 	volatile sig_atomic_t *reopen;
 	struct mvod_vo_params vo;
+	/*
+	 * --scale external: where mvod.speed_t comes from (an LCM URL, "" for LCM's default, or
+	 * file://LOG), NULL = none given; and its channel (MVOD_SPEED).
+	 */
+	const char *speed_url;
+	const char *speed_channel;
 };
 void mvod_run_opts_default(struct mvod_run_opts *o);
 

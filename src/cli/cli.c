@@ -133,8 +133,14 @@ void cli_usage_vo(FILE *out)
 {
 	fprintf(out,
 "Visual odometry:\n"
-"  --scale auto|gt       step length from triangulated structure (auto, default; the first\n"
-"                        step defines the unit) or from the ground truth (gt: benchmarking)\n"
+"  --scale MODE          step length: auto (default) from triangulated structure, the first\n"
+"                        step defines the unit; gt from the ground truth (benchmarking);\n"
+"                        height: metres from the ground plane and --camera-height;\n"
+"                        external: metres from the robot's speed (mvod.speed_t)\n"
+"  --camera-height M     the camera's height above the ground in metres (--scale height)\n"
+"  --speed-channel NAME  LCM channel of mvod.speed_t (default MVOD_SPEED)\n"
+"  --speed-url URL       where speed comes from: an LCM URL, or file://LOG?mode=r to read\n"
+"                        a log (matched to frames by utime); default: the --lcm-url\n"
 "  --detector orb|sift   keypoints and descriptors: ORB (default; binary, fast) or SIFT\n"
 "  --matcher M           how features of consecutive frames are paired (default bf):\n"
 "                          bf          brute force, ratio test and cross-check\n"

@@ -20,7 +20,7 @@ _Static_assert(sizeof(enum mvod_matcher_kind) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_traj_format) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
 
-static const char *const scale_choices[] = {"auto", "gt", NULL};
+static const char *const scale_choices[] = {"auto", "gt", "height", "external", NULL};
 
 #define AT(field) offsetof(struct mvod_config, field)
 #define KEY(s, k, f, t, field) .section = s, .key = k, .flag = f, .type = t, .offset = AT(field)
@@ -39,6 +39,11 @@ const struct mvod_config_key mvod_config_keys[] = {
 	OPTSTR("source", "gt", "gt", run.gt),
 	OPTSTR("calibration", "file", "calib", run.calib),
 	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
+	/* Above 20 m is no robot's camera: a number in millimetres or feet by mistake. */
+	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0.01, 20),
+	{KEY("vo", "speed-channel", "speed-channel", MVOD_CONFIG_STRING, run.speed_channel),
+	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
+	OPTSTR("vo", "speed-url", "speed-url", run.speed_url),
 	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
 	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names),
 	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000),

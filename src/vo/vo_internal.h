@@ -4,6 +4,7 @@
 
 #include "match.h"
 #include "mvod/vo.h"
+#include "scale.h"
 #include "types.h"
 
 /*
@@ -16,6 +17,7 @@ struct frame_slot {
 	uint8_t *has_pt;
 	struct mvod_pose pose; /* camera-to-world */
 	double gt[3]; /* ground-truth position, with --scale gt */
+	double odo;   /* --scale external: odometer at this frame, metres; NAN unknown */
 };
 
 struct mvod_vo {
@@ -35,6 +37,7 @@ struct mvod_vo {
 	enum mvod_track_state state;
 	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
+	struct mvod_scale_filter scale; /* --scale height, external */
 };
 
 /*
