@@ -3,121 +3,133 @@
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
+#include <stdio.h>
+#include <stdlib.h>
 
-#include "mvod/geom.h"
 #include "util/linalg.h"
 
 /*
- * A point is on the plane when within this fraction of the camera's height of it: on the
- * mvod-synth street the ground's inliers lie within 1 % (ORB's 0.3 px at 5-15 baselines of
- * depth), a kerb 15 cm high under a 1.6 m camera is 9 % off.
+ * A point is on the ground when within this fraction of the camera's height of it along the
+ * normal: the far ground points (50 baselines, 0.3 px) are ~2.6 % deep-noisy; a kerb 15 cm
+ * high under a 1.6 m camera is 9 % off.
  */
 #define GROUND_BAND 0.04
-/* RANSAC samples: with half the candidates on the ground, 1 - (1 - 0.5^3)^200 > 0.9999. */
-#define GROUND_ITERATIONS 200
+/* Second extent of the inliers against their first, at least (see refit_normal). */
+#define GROUND_AREA 0.33
+/* Heights tried: at most this many candidates' own, evenly spread over them. */
+#define GROUND_HYPOTHESES 64
 
 static bool below(const double *X)
 {
 	return X[1] > 0 && isfinite(X[0]) && isfinite(X[1]) && isfinite(X[2]);
 }
 
-/* Plane through a, b, c with its normal pointing down (y > 0); false when too tilted. */
-static bool plane3(const double *a, const double *b, const double *c, struct mvod_ground *g)
+static double dot3(const double *a, const double *b)
 {
-	double u[3], v[3];
-	for (int k = 0; k < 3; k++) {
-		u[k] = b[k] - a[k];
-		v[k] = c[k] - a[k];
-	}
-	double nx[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
-			u[0] * v[1] - u[1] * v[0]};
-	double len = mvod_vec3_norm(nx);
-	if (!(len > 0))
-		return false;
-	double sign = nx[1] < 0 ? -1.0 : 1.0;
-	for (int k = 0; k < 3; k++)
-		g->n[k] = sign * nx[k] / len;
-	g->h = g->n[0] * a[0] + g->n[1] * a[1] + g->n[2] * a[2];
-	return g->n[1] >= cos(MVOD_GROUND_MAX_TILT_DEG * M_PI / 180) && g->h > 0;
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-static double plane_dist(const struct mvod_ground *g, const double *X)
+/* Heights along prior of the points below the camera, into d; their count. */
+static int heights(const double *X, int n, const double prior[3], double *d)
 {
-	return fabs(g->n[0] * X[0] + g->n[1] * X[1] + g->n[2] * X[2] - g->h);
-}
-
-static int count_inliers(const double *X, int n, const struct mvod_ground *g)
-{
-	int c = 0;
+	int m = 0;
 	for (int i = 0; i < n; i++)
-		c += below(X + 3 * i) && plane_dist(g, X + 3 * i) < GROUND_BAND * g->h;
-	return c;
+		if (below(X + 3 * i) && dot3(prior, X + 3 * i) > 0)
+			d[m++] = dot3(prior, X + 3 * i);
+	return m;
 }
 
-/* Least-squares plane through the inliers of g: the covariance's least singular direction. */
-static void refit(const double *X, int n, struct mvod_ground *g)
+/*
+ * The lowest height among d[0..m) that at least half as many points support (within the band)
+ * as the best supported one, and min_inliers: nothing real lies below the ground, while the
+ * tops of cars and kerbs beside the road may gather more points than the road itself.
+ */
+static double lowest_height(const double *d, int m, int min_inliers)
+{
+	int step = m > GROUND_HYPOTHESES ? m / GROUND_HYPOTHESES : 1, count[GROUND_HYPOTHESES + 1];
+	int best = 0, k = 0;
+	for (int i = 0; i < m && k <= GROUND_HYPOTHESES; i += step, k++) {
+		count[k] = 0;
+		for (int j = 0; j < m; j++)
+			count[k] += fabs(d[j] - d[i]) < GROUND_BAND * d[i];
+		best = count[k] > best ? count[k] : best;
+	}
+	double h = 0;
+	k = 0;
+	for (int i = 0; i < m && k <= GROUND_HYPOTHESES; i += step, k++)
+		if (count[k] >= min_inliers && 2 * count[k] >= best && d[i] > h)
+			h = d[i];
+	return h;
+}
+
+/*
+ * Least-squares normal of the points within the band of g (the covariance's least axis).
+ * False when they do not spread over an area: a ground patch is wider and deeper than a
+ * third of its longest extent, while a car's sill or a kerb's edge is a line.
+ */
+static bool refit_normal(const double *X, int n, const double prior[3], struct mvod_ground *g)
 {
 	double c[3] = {0}, C[9] = {0};
 	int m = 0;
-	for (int i = 0; i < n; i++) {
-		const double *p = X + 3 * i;
-		if (!below(p) || plane_dist(g, p) >= GROUND_BAND * g->h)
-			continue;
-		for (int k = 0; k < 3; k++)
-			c[k] += p[k];
-		m++;
-	}
-	for (int k = 0; k < 3; k++)
-		c[k] /= m > 0 ? m : 1;
-	for (int i = 0; i < n; i++) {
-		const double *p = X + 3 * i;
-		if (!below(p) || plane_dist(g, p) >= GROUND_BAND * g->h)
-			continue;
-		for (int r = 0; r < 3; r++)
-			for (int k = 0; k < 3; k++)
-				C[3 * r + k] += (p[r] - c[r]) * (p[k] - c[k]);
+	for (int pass = 0; pass < 2; pass++) {
+		for (int i = 0; i < n; i++) {
+			const double *p = X + 3 * i;
+			if (!below(p) || fabs(dot3(prior, p) - g->h) >= GROUND_BAND * g->h)
+				continue;
+			for (int r = 0; r < 3 && pass == 0; r++)
+				c[r] += p[r];
+			m += pass == 0;
+			for (int r = 0; r < 9 && pass == 1; r++)
+				C[r] += (p[r / 3] - c[r / 3]) * (p[r % 3] - c[r % 3]);
+		}
+		for (int r = 0; r < 3 && pass == 0; r++)
+			c[r] /= m;
 	}
 	double U[9], S[3], Vt[9];
-	if (m < 3 || mvod_svd3(C, U, S, Vt) != 0)
-		return;
-	struct mvod_ground f;
-	double sign = Vt[7] < 0 ? -1.0 : 1.0;
+	memcpy(g->n, prior, sizeof(g->n));
+	if (mvod_svd3(C, U, S, Vt) != 0 || S[1] < GROUND_AREA * GROUND_AREA * S[0])
+		return false;
+	double sign = dot3(Vt + 6, prior) < 0 ? -1.0 : 1.0;
 	for (int k = 0; k < 3; k++)
-		f.n[k] = sign * Vt[6 + k];
-	f.h = f.n[0] * c[0] + f.n[1] * c[1] + f.n[2] * c[2];
-	f.inliers = count_inliers(X, n, &f);
-	if (f.h > 0 && f.n[1] >= cos(MVOD_GROUND_MAX_TILT_DEG * M_PI / 180) && f.inliers >= g->inliers)
-		*g = f;
+		g->n[k] = sign * Vt[6 + k];
+	return true;
 }
 
-int mvod_ground_fit(const double *X, int n, int min_inliers, struct mvod_ground *g)
+int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inliers,
+		    double *scratch, struct mvod_ground *g)
 {
-	struct mvod_ground best = {.inliers = 0};
-	uint32_t seed = 12345; /* fixed: the same points give the same plane */
-	for (int it = 0; it < GROUND_ITERATIONS && n >= 3; it++) {
-		int idx[3];
-		for (int k = 0; k < 3; k++) {
-			seed = seed * 1664525u + 1013904223u;
-			idx[k] = (int)((seed >> 8) % (uint32_t)n);
-		}
-		const double *a = X + 3 * idx[0], *b = X + 3 * idx[1], *c = X + 3 * idx[2];
-		struct mvod_ground cand;
-		if (!below(a) || !below(b) || !below(c) || !plane3(a, b, c, &cand))
-			continue;
-		cand.inliers = count_inliers(X, n, &cand);
-		if (cand.inliers > best.inliers)
-			best = cand;
-	}
-	if (best.inliers < min_inliers || best.inliers < 3)
+	int m = heights(X, n, prior, scratch);
+	double h = lowest_height(scratch, m, min_inliers > 3 ? min_inliers : 3);
+	if (h <= 0)
 		return -ENODATA;
-	refit(X, n, &best);
-	*g = best;
-	return 0;
+	int k = 0;
+	for (int i = 0; i < m; i++)
+		if (fabs(scratch[i] - h) < GROUND_BAND * h)
+			scratch[k++] = scratch[i];
+	g->h = mvod_median(scratch, k);
+	if (getenv("GDEBUG")) { fprintf(stderr, "GFIT h=%.2f inl=%d m=%d:", g->h, k, m);
+	  for (int i = 0; i < n; i++) { const double *p = X + 3*i; if (!below(p)) continue; double hh = dot3(prior, p); fprintf(stderr, " %.1f/%.0f/%.2f", hh, p[2], p[0]/p[2]); } fprintf(stderr, "\n"); }
+	g->inliers = k;
+	return refit_normal(X, n, prior, g) ? 0 : -ENODATA;
+}
+
+void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g)
+{
+	if (dot3(prior, g->n) < cos(MVOD_GROUND_MAX_TURN_DEG * M_PI / 180))
+		return;
+	double len = 0;
+	for (int k = 0; k < 3; k++)
+		prior[k] += MVOD_GROUND_NORMAL_GAIN * (g->n[k] - prior[k]);
+	len = sqrt(dot3(prior, prior));
+	for (int k = 0; k < 3; k++)
+		prior[k] /= len;
 }
 
 void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate)
 {
-	*f = (struct mvod_scale_filter){.gain = gain, .gate = gate, .since = -1};
+	*f = (struct mvod_scale_filter){.gain = gain, .gate = gate, .since = -1,
+					.ground_n = {0, 1, 0}};
 }
 
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,

@@ -9,22 +9,36 @@
 
 #include <stdbool.h>
 
-/* A plane n . X = h below the camera: n unit, pointing from the camera down to the ground. */
+/* The ground below the camera: the plane n . X = h, n unit, pointing from the camera down. */
 struct mvod_ground {
-	double n[3];
-	double h;     /* the camera's height above the plane, in the points' unit (> 0) */
+	double n[3];  /* the inliers' own least-squares normal (for the normal's estimate) */
+	double h;     /* the camera's height above them along the expected normal, in the
+			 points' unit (> 0) */
 	int inliers;  /* points within the inlier band */
 };
 
 /*
- * The ground plane among n points X (n x 3, camera frame, OpenCV axes: y down), any unit.
- * Only points below the optical centre (y > 0) take part; the plane's normal must be within
- * MVOD_GROUND_MAX_TILT_DEG of the camera's y axis (the pitch and roll are estimated, not
- * assumed). RANSAC over a fixed sample sequence (runs repeat exactly), then a least-squares
- * refit on the inliers. Returns 0, or -ENODATA when no plane has min_inliers points.
+ * The ground among n points X (n x 3, camera frame, OpenCV axes: y down), any unit, given the
+ * normal expected (prior, unit: the estimate over earlier frames). Only points below the
+ * optical centre (y > 0) take part. The height is the one with the most points within a band
+ * of +-MVOD_GROUND_BAND of it along prior (hypotheses from a fixed subsample: repeatable), then
+ * the median over them; the normal is refitted to those points. scratch holds n doubles.
+ * Returns 0, or -ENODATA when no height has min_inliers points.
+ *
+ * The normal is not fitted afresh each frame because a fit to one frame's points tilts: the
+ * far ground points (20-50 baselines) are 2 % deep-noisy, and free 3-point fits on the
+ * mvod-synth street came out tilted by up to 13 deg with heights 60 % off.
  */
-#define MVOD_GROUND_MAX_TILT_DEG 20.0
-int mvod_ground_fit(const double *X, int n, int min_inliers, struct mvod_ground *g);
+int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inliers,
+		    double *scratch, struct mvod_ground *g);
+/*
+ * Moves the expected normal (camera pitch and roll) towards a fit's by MVOD_GROUND_NORMAL_GAIN
+ * when within MVOD_GROUND_MAX_TURN_DEG of it: a slow estimate of the mount's pitch that
+ * follows a car's pitching under braking (~1 deg over a second) and not one frame's noise.
+ */
+#define MVOD_GROUND_NORMAL_GAIN 0.1
+#define MVOD_GROUND_MAX_TURN_DEG 5.0
+void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g);
 
 /*
  * The scale filter: each measurement is a ratio, metric value / predicted value (for
@@ -39,6 +53,8 @@ struct mvod_scale_filter {
 	double quality; /* 0-1, of the last accepted measurement */
 	int since;      /* steps since the last accepted measurement; -1 before the first */
 	int refused;    /* measurements refused in a row */
+	double ground_n[3]; /* --scale height: the ground's expected normal in the camera frame
+			       (the mount's pitch and roll), from (0, 1, 0) on */
 };
 void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate);
 /*

@@ -68,7 +68,7 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
  * Fewer ground points than this give no height: three points always span a plane, and a
  * patch of road under a car's bonnet on KITTI has 15-60 of them.
  */
-#define GROUND_MIN_INLIERS 12
+#define GROUND_MIN_INLIERS 20
 
 /* This step's length in metres, NAN when not measured; *q its quality (0-1). */
 static double measured_step(struct mvod_vo *vo, int n, double *q)
@@ -87,8 +87,10 @@ static double measured_step(struct mvod_vo *vo, int n, double *q)
 		X[2] = vo->depth[i];
 	}
 	struct mvod_ground g;
-	if (mvod_ground_fit(vo->prev_pts, m, GROUND_MIN_INLIERS, &g) != 0)
+	if (mvod_ground_fit(vo->prev_pts, m, vo->scale.ground_n, GROUND_MIN_INLIERS, vo->scratch,
+			    &g) != 0)
 		return NAN;
+	mvod_ground_prior_update(vo->scale.ground_n, &g);
 	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
 	*q = g.inliers / (g.inliers + 20.0);
 	return vo->p.camera_height_m / g.h;

@@ -23,7 +23,7 @@
  * space), and one more than 25 % off the prediction is refused. Per-step heights on KITTI
  * scatter by ~5 %, structure drifts ~1 % a step: 0.2 averages ~5 steps of heights.
  */
-#define HEIGHT_GAIN 0.2
+#define HEIGHT_GAIN 0.5
 #define HEIGHT_GATE 0.22 /* log(1.25) */
 
 const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",

@@ -43,33 +43,60 @@ static void ground_point(unsigned *s, double pitch, double h, double *X)
 	X[1] = (h - X[2] * sin(pitch)) / cos(pitch);
 }
 
-static void test_ground_fit_exact_plane_with_pitch(void **state)
+/* 200 points of a plane pitched by pitch (h = 16), then 100 off it: facades and higher. */
+static void plane_scene(double pitch, double *X)
 {
-	(void)state;
-	double X[300 * 3];
 	unsigned s = 7;
-	double pitch = 5 * M_PI / 180;
 	for (int i = 0; i < 200; i++)
 		ground_point(&s, pitch, 16.0, X + 3 * i);
-	/* A hundred points off the ground: facades (x = +-8) and things above the camera. */
 	for (int i = 200; i < 300; i++) {
 		X[3 * i] = i % 2 ? 8 : -8;
 		X[3 * i + 1] = uniform(&s, -10, 10);
 		X[3 * i + 2] = uniform(&s, 3, 30);
 	}
+}
+
+static void test_ground_fit_exact_plane(void **state)
+{
+	(void)state;
+	double X[300 * 3], scratch[300];
+	double pitch = 5 * M_PI / 180, n_true[3] = {0, cos(pitch), sin(pitch)};
+	plane_scene(pitch, X);
 	struct mvod_ground g;
-	assert_int_equal(mvod_ground_fit(X, 300, 12, &g), 0);
-	/* Exact points: the least-squares refit lands on the plane to rounding. */
+	assert_int_equal(mvod_ground_fit(X, 300, n_true, 12, scratch, &g), 0);
+	/* Exact points: the height and the refitted normal are the plane's to rounding. */
 	assert_true(fabs(g.h - 16.0) < 1e-9);
-	assert_true(fabs(g.n[1] - cos(pitch)) < 1e-9);
-	assert_true(fabs(g.n[2] - sin(pitch)) < 1e-9);
+	assert_true(fabs(g.n[1] - n_true[1]) < 1e-9 && fabs(g.n[2] - n_true[2]) < 1e-9);
 	assert_int_equal(g.inliers, 200);
+}
+
+/* The expected normal starts level and learns a 3 deg pitch from the fits. */
+static void test_ground_prior_learns_pitch(void **state)
+{
+	(void)state;
+	double X[300 * 3], scratch[300], prior[3] = {0, 1, 0};
+	double pitch = 3 * M_PI / 180;
+	plane_scene(pitch, X);
+	struct mvod_ground g;
+	for (int i = 0; i < 60; i++) {
+		assert_int_equal(mvod_ground_fit(X, 300, prior, 12, scratch, &g), 0);
+		mvod_ground_prior_update(prior, &g);
+	}
+	/* 0.9^60 of 3 deg is 0.005 deg; the first fits (off the band) are exact anyway. */
+	assert_true(fabs(atan2(prior[2], prior[1]) - pitch) < 0.01 * M_PI / 180);
+	/* The tilt left (under 0.01 deg) moves points 3-30 away by under 5e-3 along it. */
+	assert_true(fabs(g.h - 16.0) < 5e-3);
+	/* A fit 10 deg off is not followed (one frame's noise, not the mount). */
+	double before[3] = {prior[0], prior[1], prior[2]};
+	g.n[0] = 0, g.n[1] = cos(pitch + 0.17), g.n[2] = sin(pitch + 0.17);
+	mvod_ground_prior_update(prior, &g);
+	assert_memory_equal(prior, before, sizeof(before));
 }
 
 static void test_ground_fit_needs_ground(void **state)
 {
 	(void)state;
-	double X[100 * 3];
+	double X[100 * 3], scratch[100], level[3] = {0, 1, 0};
 	unsigned s = 9;
 	/* Nothing below the camera: no plane. */
 	for (int i = 0; i < 100; i++) {
@@ -78,18 +105,32 @@ static void test_ground_fit_needs_ground(void **state)
 		X[3 * i + 2] = uniform(&s, 3, 30);
 	}
 	struct mvod_ground g;
-	assert_int_equal(mvod_ground_fit(X, 100, 12, &g), -ENODATA);
-	/* A wall below the camera (vertical): tilted beyond 20 deg, not a ground. */
+	assert_int_equal(mvod_ground_fit(X, 100, level, 12, scratch, &g), -ENODATA);
+	/* A line at one height below the camera (a car's sill): no area, not a ground. */
 	for (int i = 0; i < 100; i++) {
-		X[3 * i] = 3;
-		X[3 * i + 1] = uniform(&s, 0.1, 2);
+		X[3 * i + 1] = 1.0;
+		X[3 * i + 2] = 6.0;
 	}
-	assert_int_equal(mvod_ground_fit(X, 100, 12, &g), -ENODATA);
+	assert_int_equal(mvod_ground_fit(X, 100, level, 12, scratch, &g), -ENODATA);
 	/* Ten ground points are fewer than asked for. */
 	for (int i = 0; i < 10; i++)
 		ground_point(&s, 0, 16, X + 3 * i);
-	assert_int_equal(mvod_ground_fit(X, 10, 12, &g), -ENODATA);
-	assert_int_equal(mvod_ground_fit(X, 0, 12, &g), -ENODATA);
+	assert_int_equal(mvod_ground_fit(X, 10, level, 12, scratch, &g), -ENODATA);
+	assert_int_equal(mvod_ground_fit(X, 0, level, 12, scratch, &g), -ENODATA);
+}
+
+/* Points on the roof of a car (above the ground), more than on the road: the road wins. */
+static void test_ground_fit_lowest_plane(void **state)
+{
+	(void)state;
+	double X[300 * 3], scratch[300], level[3] = {0, 1, 0};
+	unsigned s = 11;
+	for (int i = 0; i < 300; i++)
+		ground_point(&s, 0, i < 120 ? 16.0 : 10.0, X + 3 * i);
+	struct mvod_ground g;
+	assert_int_equal(mvod_ground_fit(X, 300, level, 12, scratch, &g), 0);
+	assert_true(fabs(g.h - 16.0) < 1e-9);
+	assert_int_equal(g.inliers, 120);
 }
 
 static void test_filter(void **state)
@@ -271,8 +312,10 @@ static void test_external_odometer(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
-		cmocka_unit_test(test_ground_fit_exact_plane_with_pitch),
+		cmocka_unit_test(test_ground_fit_exact_plane),
+		cmocka_unit_test(test_ground_prior_learns_pitch),
 		cmocka_unit_test(test_ground_fit_needs_ground),
+		cmocka_unit_test(test_ground_fit_lowest_plane),
 		cmocka_unit_test(test_filter),
 		cmocka_unit_test(test_height_metric_from_first_step),
 		cmocka_unit_test(test_height_without_ground),
