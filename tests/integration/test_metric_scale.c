@@ -78,20 +78,25 @@ static void metric_errors(const struct run_result *r, const char *name, struct t
 	assert_non_null(strstr(r->out, "no scale alignment"));
 }
 
-/* How many of the log's poses have scale source src; all poses finite. */
-static int count_source(const char *name, int src)
+/* How many of the log's frames poses have scale source src; all poses finite. */
+static int count_source_in(const char *name, int frames, int src)
 {
 	static mvod_pose_t poses[FRAMES + 8];
 	char path[320];
 	snprintf(path, sizeof(path), "%s/%s.lcmlog", dir, name);
 	int n = harness_poses(path, poses, FRAMES + 8), c = 0;
-	assert_int_equal(n, FRAMES);
+	assert_int_equal(n, frames);
 	for (int i = 0; i < n; i++) {
 		for (int k = 0; k < 3; k++)
 			assert_true(isfinite(poses[i].position[k]));
 		c += poses[i].scale_source == src;
 	}
 	return c;
+}
+
+static int count_source(const char *name, int src)
+{
+	return count_source_in(name, FRAMES, src);
 }
 
 static void test_height(void **state)
@@ -120,11 +125,106 @@ static void test_external(void **state)
 	assert_true(count_source("external", MVOD_POSE_T_SCALE_EXTERNAL) > FRAMES * 3 / 4);
 }
 
+/*
+ * Speed for the first 30 frames only: from then on the steps keep the last scale from
+ * structure, the poses say so (scale source structure), the log says why once, and the path
+ * stays metric to within what structure drifts over 30 frames.
+ */
+static void test_external_speed_stops(void **state)
+{
+	(void)state;
+	char log[300], url[320];
+	snprintf(log, sizeof(log), "%s/speed30.lcmlog", dir);
+	snprintf(url, sizeof(url), "file://%s?mode=r", log);
+	speed_log(log, "--samples", "30", "--no-distance", NULL);
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "stops", "--scale", "external", "--speed-url", url, NULL, NULL);
+	metric_errors(&r, "stops", &e);
+	assert_non_null(strstr(r.err, "no mvod.speed_t on MVOD_SPEED"));
+	int ext = count_source("stops", MVOD_POSE_T_SCALE_EXTERNAL);
+	int str = count_source("stops", MVOD_POSE_T_SCALE_STRUCTURE);
+	/* Frames 31-35 still extrapolate the last speed (within MVOD_SPEED_STALE_US). */
+	assert_true(ext > 20 && ext <= 35);
+	assert_true(str >= 20);
+	/* Measured 5.6 %: structure alone drifts over the second half at 0.2 m a step. */
+	assert_true(e.ate_m < 0.11 * e.length_m);
+}
+
+/* mvod exits with status, and its stderr holds needle. */
+static void refused(const struct run_result *r, int status, const char *needle)
+{
+	if (!r->exited || r->status != status || !strstr(r->err, needle))
+		fail_msg("expected exit %d with \"%s\", got %d: %s", status, needle, r->status,
+			 r->err);
+}
+
+static void test_bad_heights(void **state)
+{
+	(void)state;
+	const char *bad[] = {"0", "-1.6", "1600", "nan", "1.6m"};
+	struct run_result r;
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		run_mvod(&r, "bad", "--scale", "height", "--camera-height", bad[i], NULL, NULL);
+		refused(&r, 2, "camera-height");
+	}
+	run_mvod(&r, "bad", "--scale", "height", NULL, NULL, NULL, NULL);
+	refused(&r, 1, "--scale height needs the camera's height");
+}
+
+static void test_bad_speed_sources(void **state)
+{
+	(void)state;
+	struct run_result r;
+	char url[320];
+	run_mvod(&r, "bad", "--scale", "external", "--speed-url", "file:///nonexistent/x.lcmlog",
+		 NULL, NULL);
+	refused(&r, 1, "cannot read the LCM log /nonexistent/x.lcmlog");
+	snprintf(url, sizeof(url), "file://%s/out.lcmlog?mode=w", dir);
+	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
+	refused(&r, 1, "a log to write");
+	run_mvod(&r, "bad", "--scale", "external", "--speed-channel", "", NULL, NULL);
+	refused(&r, 2, "speed-channel");
+}
+
+/*
+ * Logs of the wrong type, with a time going back, on another channel: each a warning naming
+ * it, the run goes on with finite poses.
+ */
+static void test_bad_speed_messages(void **state)
+{
+	(void)state;
+	static const struct {
+		const char *flag, *channel, *needle;
+	} cases[] = {
+		{"--wrong-type", NULL, "are not mvod.speed_t"},
+		{"--decreasing", NULL, "not after the one before"},
+		{"--no-distance", "ELSEWHERE", "no mvod.speed_t on MVOD_SPEED"},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		char log[300], url[320];
+		snprintf(log, sizeof(log), "%s/bad%zu.lcmlog", dir, i);
+		snprintf(url, sizeof(url), "file://%s?mode=r", log);
+		speed_log(log, cases[i].flag, cases[i].channel ? "--channel" : NULL,
+			  cases[i].channel, NULL);
+		struct run_result r;
+		run_mvod(&r, "badmsg", "--scale", "external", "--speed-url", url, "--max-frames",
+			 "15");
+		if (!r.exited || r.status != 0 || !strstr(r.err, cases[i].needle))
+			fail_msg("%s: exit %d, %s", cases[i].needle, r.status, r.err);
+		count_source_in("badmsg", 15, 0); /* every pose finite */
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_height),
 		cmocka_unit_test(test_external),
+		cmocka_unit_test(test_external_speed_stops),
+		cmocka_unit_test(test_bad_heights),
+		cmocka_unit_test(test_bad_speed_sources),
+		cmocka_unit_test(test_bad_speed_messages),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
