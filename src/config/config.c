@@ -39,11 +39,6 @@ const struct mvod_config_key mvod_config_keys[] = {
 	OPTSTR("source", "gt", "gt", run.gt),
 	OPTSTR("calibration", "file", "calib", run.calib),
 	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
-	/* Above 20 m is no robot's camera: a number in millimetres or feet by mistake. */
-	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0.01, 20),
-	{KEY("vo", "speed-channel", "speed-channel", MVOD_CONFIG_STRING, run.speed_channel),
-	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
-	OPTSTR("vo", "speed-url", "speed-url", run.speed_url),
 	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
 	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names),
 	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000),
@@ -56,6 +51,11 @@ const struct mvod_config_key mvod_config_keys[] = {
 	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1),
 	{KEY("vo", "blur", "blur", MVOD_CONFIG_INT, run.vo.blur_ksize), .lo = 0, .hi = 99,
 	 .odd = true},
+	/* 0 = none; above 20 m is no robot's camera: millimetres or feet by mistake. */
+	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0, 20),
+	{KEY("vo", "speed-channel", "speed-channel", MVOD_CONFIG_STRING, run.speed_channel),
+	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
+	OPTSTR("vo", "speed-url", "speed-url", run.speed_url),
 	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false},
 	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true},
 	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel),
