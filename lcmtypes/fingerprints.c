@@ -9,6 +9,7 @@
 #include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
 #include "mvod_status2_t.h"
+#include "mvod_speed_t.h"
 #include "mvod_status_t.h"
 
 static const struct {
@@ -19,6 +20,7 @@ static const struct {
 	{"mvod.status_t", __mvod_status_t_get_hash},
 	{"mvod.pose2_t", __mvod_pose2_t_get_hash},
 	{"mvod.status2_t", __mvod_status2_t_get_hash},
+	{"mvod.speed_t", __mvod_speed_t_get_hash},
 };
 
 int main(void)

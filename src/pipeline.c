@@ -12,6 +12,7 @@
 #include "mvod/capture.h"
 #include "mvod/log.h"
 #include "util/body_frame.h"
+#include "mvod/speed.h"
 #include "util/clock.h"
 #include "util/notify.h"
 #include "util/output.h"
@@ -43,7 +44,8 @@ const char *const mvod_clock_names[] = {"monotonic", "realtime", NULL};
 
 void mvod_run_opts_default(struct mvod_run_opts *o)
 {
-	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM, .status_hz = 1};
+	*o = (struct mvod_run_opts){.traj_format = MVOD_TRAJ_TUM, .status_hz = 1,
+				    .speed_channel = MVOD_DEFAULT_SPEED_CHANNEL};
 	mvod_vo_params_default(&o->vo);
 }
 
@@ -76,6 +78,9 @@ struct run {
 	bool restarted;                    /* the VO forgot the scene before the next frame */
 	/* mvod.status_t FAULT_ bits seen so far; status_due: publish status with the next frame */
 	struct mvod_faults faults;
+	struct mvod_speed *speed;          /* --scale external */
+	bool speed_stale;                  /* the last frame had no speed near its time */
+	struct mvod_speed_counts speed_refused; /* refused messages already logged */
 };
 
 /* Resident set size in KiB; read with read(2) into the stack, since stdio would malloc. */
@@ -187,6 +192,30 @@ static int check_output_frame(struct run *r)
 	return 0;
 }
 
+/* --scale height needs a height; --scale external its source of speed. */
+static int open_scale(struct run *r)
+{
+	const struct mvod_run_opts *o = r->o;
+	if (o->vo.scale_mode == MVOD_SCALE_MODE_HEIGHT && !(o->vo.camera_height_m > 0)) {
+		LOG(ERROR, "--scale height needs the camera's height above the ground: pass "
+			   "--camera-height M (metres) or set [vo] camera-height in the --config file");
+		return -EINVAL;
+	}
+	if (o->vo.scale_mode != MVOD_SCALE_MODE_EXTERNAL)
+		return 0;
+	if (!o->speed_url) {
+		LOG(ERROR, "--scale external needs the robot's speed (mvod.speed_t): pass "
+			   "--speed-url URL (an LCM URL or file://LOG?mode=r), or leave LCM on to "
+			   "read it where mvod publishes");
+		return -EINVAL;
+	}
+	char err[512] = "";
+	int ret = mvod_speed_create(o->speed_url, o->speed_channel, &r->speed, err, sizeof(err));
+	if (ret)
+		LOG(ERROR, "--speed-url: %s", err);
+	return ret;
+}
+
 static int open_inputs(struct run *r)
 {
 	char err[512] = "";
@@ -207,6 +236,9 @@ static int open_inputs(struct run *r)
 	if (ret)
 		return ret;
 	ret = open_gt(r);
+	if (ret)
+		return ret;
+	ret = open_scale(r);
 	if (ret)
 		return ret;
 	ret = mvod_vo_check_size(&o->vo, &r->cam, err, sizeof(err));
@@ -256,7 +288,7 @@ static int open_outputs(struct run *r)
 		return ret;
 	}
 	struct mvod_sink m;
-	bool gt_scale = o->vo.scale_mode == MVOD_SCALE_MODE_GT;
+	bool gt_scale = mvod_scale_mode_metric(o->vo.scale_mode); /* metres: no scale alignment */
 	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, r->gt.n, &m), &m, true);
 	const struct mvod_sink *eval = &r->sinks[0];
 	for (int i = 0; i < o->n_sinks; i++)
@@ -466,6 +498,43 @@ static bool before_dataset_gt(struct run *r, const struct mvod_frame *f)
 	return true;
 }
 
+/* Speed messages refused since the last frame: the first of each reason is logged. */
+static void log_refused_speed(struct run *r)
+{
+	struct mvod_speed_counts c;
+	mvod_speed_counts(r->speed, &c);
+	const char *ch = r->o->speed_channel;
+	if (c.bad_type && !r->speed_refused.bad_type)
+		LOG(WARN, "messages on %s are not mvod.speed_t (their fingerprint differs): "
+			  "refused; publish mvod.speed_t there or name its channel with "
+			  "--speed-channel", ch);
+	if (c.bad_time && !r->speed_refused.bad_time)
+		LOG(WARN, "an mvod.speed_t on %s has utime %lld, not after the one before: refused "
+			  "(times must increase; later ones are only counted)", ch,
+		    (long long)c.last_bad_utime);
+	if (c.bad_value && !r->speed_refused.bad_value)
+		LOG(WARN, "an mvod.speed_t on %s has a speed or distance that is not finite or "
+			  "beyond %g m/s: refused", ch, MVOD_SPEED_MAX);
+	r->speed_refused = c;
+}
+
+/* --scale external: the robot's odometer at this frame's time, into the VO. */
+static void feed_speed(struct run *r, const struct mvod_frame *f)
+{
+	double odo = NAN;
+	bool stale = mvod_speed_odometer(r->speed, f->utime, &odo) != 0;
+	mvod_vo_set_odometer(r->vo, stale ? NAN : odo);
+	log_refused_speed(r);
+	if (stale && !r->speed_stale)
+		LOG(WARN, "frame %lld (t = %.6f s): no mvod.speed_t on %s within %.1f s: steps keep "
+			  "the last scale from structure (scale source \"structure\", confidence "
+			  "falling) until speed arrives", (long long)f->index, f->utime / 1e6,
+		    r->o->speed_channel, MVOD_SPEED_STALE_US / 1e6);
+	if (!stale && r->speed_stale)
+		LOG(INFO, "frame %lld: speed on %s again", (long long)f->index, r->o->speed_channel);
+	r->speed_stale = stale;
+}
+
 static int process_frame(struct run *r, const struct mvod_frame *f, double capture_ms)
 {
 	const struct mvod_pose *gt = gt_for(r, f);
@@ -475,6 +544,8 @@ static int process_frame(struct run *r, const struct mvod_frame *f, double captu
 		log_missing_gt(r, f);
 		return -ENOENT;
 	}
+	if (r->speed)
+		feed_speed(r, f);
 	struct mvod_vo_result res;
 	int ret = mvod_vo_process(r->vo, &f->img, gt ? gt->t : NULL, &res);
 	if (ret) {
@@ -689,6 +760,7 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 			ret = fret;
 	}
 	sinks_destroy(&r);
+	mvod_speed_destroy(r.speed);
 	mvod_vo_destroy(r.vo);
 	mvod_traj_free(&r.gt);
 	mvod_source_close(r.src);

@@ -85,6 +85,12 @@ struct mvod_run_opts {
 	const char *camera_to_body;    /* "x,y,z,qx,qy,qz,qw" with axes ros, or NULL */
 	enum mvod_clock clock;         /* monotonic; realtime only for live cameras */
 	struct mvod_vo_params vo;
+	/*
+	 * --scale external: where mvod.speed_t comes from (an LCM URL, "" for LCM's default, or
+	 * file://LOG), NULL = none given; and its channel (MVOD_SPEED).
+	 */
+	const char *speed_url;
+	const char *speed_channel;
 };
 void mvod_run_opts_default(struct mvod_run_opts *o);
 

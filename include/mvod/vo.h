@@ -42,7 +42,11 @@ enum mvod_scale_source {
 enum mvod_scale_mode {
 	MVOD_SCALE_MODE_AUTO = 0,
 	MVOD_SCALE_MODE_GT = 1,
+	MVOD_SCALE_MODE_HEIGHT = 2,   /* metres from camera_height_m above the ground plane */
+	MVOD_SCALE_MODE_EXTERNAL = 3, /* metres from the robot's odometer (mvod_vo_set_odometer) */
 };
+/* Whether the output of a scale mode is in metres (GT, HEIGHT, EXTERNAL). */
+bool mvod_scale_mode_metric(enum mvod_scale_mode m);
 
 /* How poses are estimated. */
 enum mvod_vo_mode {
@@ -141,6 +145,7 @@ struct mvod_vo_params {
 	int min_inliers;        /* fewer E inliers in front of both cameras: not tracked. 20 */
 	double min_parallax_px; /* median rotation-compensated flow below this: rotation only. 1.0 */
 	enum mvod_scale_mode scale_mode;
+	double camera_height_m; /* HEIGHT: the camera's height above the ground, metres. 0 */
 };
 void mvod_vo_params_default(struct mvod_vo_params *p);
 
@@ -215,6 +220,13 @@ int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const doub
  * as after a loss of tracking. Does not allocate.
  */
 void mvod_vo_restart(struct mvod_vo *vo);
+
+/*
+ * --scale external: the distance the robot travelled (metres, from any origin) at the time of
+ * the next frame given to mvod_vo_process, NAN when unknown (speed stale or missing: the
+ * scale then carries on from structure, its confidence decaying). Does not allocate.
+ */
+void mvod_vo_set_odometer(struct mvod_vo *vo, double metres);
 
 #ifdef __cplusplus
 }

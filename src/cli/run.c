@@ -193,7 +193,8 @@ static void print_skipped(const struct mvod_run_summary *s)
 /* Accuracy, or why there is none: never a number that an alignment made up. */
 static void print_accuracy(const struct mvod_config *c, const struct mvod_run_summary *s)
 {
-	const char *unit = c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "m" : "units (free scale)";
+	bool metric = mvod_scale_mode_metric(c->run.vo.scale_mode);
+	const char *unit = metric ? "m" : "units (free scale)";
 	if (s->gt_frames < s->frames)
 		printf("mvod: ground truth covers frames %lld-%lld of %lld (%lld have a pose): the "
 		       "accuracy below is over those only\n", (long long)s->gt_first,
@@ -216,7 +217,7 @@ static void print_accuracy(const struct mvod_config *c, const struct mvod_run_su
 	else
 		printf("ATE %.3f m over %.1f m, %.1f %% (%s)\n", s->ate_rmse_m, s->path_len_m,
 		       100.0 * s->ate_rmse_m / fmax(s->path_len_m, 1e-9),
-		       c->run.vo.scale_mode == MVOD_SCALE_MODE_GT ? "SE(3)-aligned" : "Sim(3)-aligned");
+		       metric ? "SE(3)-aligned, no scale alignment" : "Sim(3)-aligned");
 }
 
 static void print_summary(const struct mvod_config *c, const struct mvod_run_summary *s)
@@ -257,6 +258,9 @@ static int run(struct mvod_config *cfg)
 		return EXIT_FAILURE;
 	}
 	cfg->run.reopen = &reopen_requested;
+	/* --scale external reads speed where mvod publishes unless told otherwise. */
+	if (!cfg->run.speed_url && cfg->lcm_enabled)
+		cfg->run.speed_url = cfg->lcm_url ? cfg->lcm_url : "";
 	struct mvod_run_summary sum;
 	int ret = mvod_run(&cfg->run, ipc, &stop_requested, &sum);
 	mvod_ipc_destroy(ipc);

@@ -24,7 +24,7 @@ _Static_assert(sizeof(enum mvod_log_level) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_axes) == sizeof(int), "enum size");
 _Static_assert(sizeof(enum mvod_clock) == sizeof(int), "enum size");
 
-static const char *const scale_choices[] = {"auto", "gt", NULL};
+static const char *const scale_choices[] = {"auto", "gt", "height", "external", NULL};
 
 #define AT(field) offsetof(struct mvod_config, field)
 #define KEY(s, k, f, t, field) .section = s, .key = k, .flag = f, .type = t, .offset = AT(field)
@@ -60,6 +60,11 @@ const struct mvod_config_key mvod_config_keys[] = {
 	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1),
 	{KEY("vo", "blur", "blur", MVOD_CONFIG_INT, run.vo.blur_ksize), .lo = 0, .hi = 99,
 	 .odd = true},
+	/* 0 = none; above 20 m is no robot's camera: millimetres or feet by mistake. */
+	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0, 20),
+	{KEY("vo", "speed-channel", "speed-channel", MVOD_CONFIG_STRING, run.speed_channel),
+	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
+	OPTSTR("vo", "speed-url", "speed-url", run.speed_url),
 	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false},
 	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true},
 	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel),

@@ -64,6 +64,50 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
 	return mvod_motion_relative_scale(vo->prev_pts, vo->cur_pts, m, 10, vo->scratch, s);
 }
 
+/*
+ * Fewer ground points than this give no height: three points always span a plane, and a
+ * patch of road under a car's bonnet on KITTI has 15-60 of them.
+ */
+#define GROUND_MIN_INLIERS 20
+
+/* This step's length in metres, NAN when not measured; *q its quality (0-1). */
+static double measured_step(struct mvod_vo *vo, int n, double *q)
+{
+	*q = 1.0;
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL)
+		return fabs(vo->cur->odo - vo->ref->odo);
+	/* The structure in the reference's frame with a unit baseline, so h is in baselines. */
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		if (!well_triangulated(vo, i))
+			continue;
+		double *X = vo->prev_pts + 3 * m++;
+		X[0] = vo->x1[2 * i] * vo->depth[i];
+		X[1] = vo->x1[2 * i + 1] * vo->depth[i];
+		X[2] = vo->depth[i];
+	}
+	struct mvod_ground g;
+	if (mvod_ground_fit(vo->prev_pts, m, vo->scale.ground_n, GROUND_MIN_INLIERS, vo->scratch,
+			    &g) != 0)
+		return NAN;
+	mvod_ground_prior_update(vo->scale.ground_n, &g);
+	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
+	*q = g.inliers / (g.inliers + 20.0);
+	return vo->p.camera_height_m / g.h;
+}
+
+/* --scale height, external: the prediction s corrected by this step's measurement. */
+static double metric_step(struct mvod_vo *vo, int n, double s, enum mvod_scale_source *src)
+{
+	double q, m = measured_step(vo, n, &q);
+	bool used;
+	double f = mvod_scale_filter_step(&vo->scale, m / s, q, &used);
+	if (used)
+		*src = vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL ? MVOD_SCALE_EXTERNAL
+								   : MVOD_SCALE_HEIGHT;
+	return s * f;
+}
+
 static double step_length(struct mvod_vo *vo, int n, const double *gt,
 			  enum mvod_scale_source *src)
 {
@@ -74,10 +118,13 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 	double s;
 	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {
 		*src = MVOD_SCALE_STRUCTURE;
-		return s;
+	} else {
+		*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
+		s = vo->have_step ? vo->last_step : 1.0;
 	}
-	*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
-	return vo->have_step ? vo->last_step : 1.0;
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_AUTO)
+		return s;
+	return metric_step(vo, n, s, src);
 }
 
 /* Structure of this step in the new reference's frame (X2 = R X1 + t s), for the next scale. */

@@ -4,6 +4,7 @@
 
 #include "match.h"
 #include "mvod/vo.h"
+#include "scale.h"
 #include "types.h"
 
 /*
@@ -16,6 +17,7 @@ struct frame_slot {
 	uint8_t *has_pt;
 	struct mvod_pose pose; /* camera-to-world */
 	double gt[3]; /* ground-truth position, with --scale gt */
+	double odo;   /* --scale external: odometer at this frame, metres; NAN unknown */
 };
 
 struct mvod_vo {
@@ -38,6 +40,7 @@ struct mvod_vo {
 	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
+	struct mvod_scale_filter scale; /* --scale height, external */
 };
 
 /*

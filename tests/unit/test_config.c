@@ -39,6 +39,9 @@ static const char every_key[] =
 	"file = calib.json\n"
 	"[vo]\n"
 	"scale = gt\n"
+	"camera-height = 1.65\n"
+	"speed-channel = SPD\n"
+	"speed-url = file:///tmp/s.lcmlog?mode=r\n"
 	"features = 777\n"
 	"frontend = klt\n"
 	"tracks = 333\n"
@@ -76,6 +79,9 @@ static void assert_every_key(const struct mvod_config *c)
 	assert_string_equal(c->run.gt, "gt.tum");
 	assert_string_equal(c->run.calib, "calib.json");
 	assert_int_equal(c->run.vo.scale_mode, MVOD_SCALE_MODE_GT);
+	assert_true(c->run.vo.camera_height_m == 1.65);
+	assert_string_equal(c->run.speed_channel, "SPD");
+	assert_string_equal(c->run.speed_url, "file:///tmp/s.lcmlog?mode=r");
 	assert_int_equal(c->run.vo.max_features, 777);
 	assert_int_equal(c->run.vo.frontend, MVOD_FRONTEND_KLT);
 	assert_int_equal(c->run.vo.max_tracks, 333);

@@ -1,0 +1,73 @@
+/*
+ * Metric scale for the VO: the ground plane among triangulated points (camera height), and a
+ * filter that fuses metric measurements (height, the robot's odometer) into a scale that
+ * structure alone carries between them. Plain C with no state outside the caller's structs, so
+ * two-view mode (twoview.c) and map mode can share it.
+ */
+#ifndef MVOD_VO_SCALE_H
+#define MVOD_VO_SCALE_H
+
+#include <stdbool.h>
+
+/* The ground below the camera: the plane n . X = h, n unit, pointing from the camera down. */
+struct mvod_ground {
+	double n[3];  /* the inliers' own least-squares normal (for the normal's estimate) */
+	double h;     /* the camera's height above them along the expected normal, in the
+			 points' unit (> 0) */
+	int inliers;  /* points within the inlier band */
+};
+
+/*
+ * The ground among n points X (n x 3, camera frame, OpenCV axes: y down), any unit, given the
+ * normal expected (prior, unit: the estimate over earlier frames). Only points below the
+ * optical centre (y > 0) take part. The height is the one with the most points within a band
+ * of +-MVOD_GROUND_BAND of it along prior (hypotheses from a fixed subsample: repeatable), then
+ * the median over them; the normal is refitted to those points. scratch holds n doubles.
+ * Returns 0, or -ENODATA when no height has min_inliers points.
+ *
+ * The normal is not fitted afresh each frame because a fit to one frame's points tilts: the
+ * far ground points (20-50 baselines) are 2 % deep-noisy, and free 3-point fits on the
+ * mvod-synth street came out tilted by up to 13 deg with heights 60 % off.
+ */
+int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inliers,
+		    double *scratch, struct mvod_ground *g);
+/*
+ * Moves the expected normal (camera pitch and roll) towards a fit's by MVOD_GROUND_NORMAL_GAIN
+ * when within MVOD_GROUND_MAX_TURN_DEG of it: a slow estimate of the mount's pitch that
+ * follows a car's pitching under braking (~1 deg over a second) and not one frame's noise.
+ */
+#define MVOD_GROUND_NORMAL_GAIN 0.1
+#define MVOD_GROUND_MAX_TURN_DEG 5.0
+void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g);
+
+/*
+ * The scale filter: each measurement is a ratio, metric value / predicted value (for
+ * two-view mode, the step length in metres / the step structure predicts). The first one is
+ * taken whole; later ones move the scale by gain in log space, and a ratio beyond the gate
+ * (one bad frame: a car's roof taken for the road) is refused, the gate widening with each
+ * refusal in a row so that a real change is followed within a few frames.
+ */
+struct mvod_scale_filter {
+	double gain;    /* fraction of a measurement's log ratio applied, (0, 1] */
+	double gate;    /* largest |log ratio| accepted; INFINITY = all */
+	double quality; /* 0-1, of the last accepted measurement */
+	int since;      /* steps since the last accepted measurement; -1 before the first */
+	int refused;    /* measurements refused in a row */
+	double ground_n[3]; /* --scale height: the ground's expected normal in the camera frame
+			       (the mount's pitch and roll), from (0, 1, 0) on */
+};
+void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate);
+/*
+ * One step: ratio (NAN when there was no measurement) and its quality (0-1). Returns the
+ * factor to multiply the prediction by (1 without an accepted measurement); *used says
+ * whether a measurement was accepted.
+ */
+double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
+			      bool *used);
+/* Whether any measurement was accepted yet (the output is metric). */
+bool mvod_scale_filter_metric(const struct mvod_scale_filter *f);
+/* 0-1: the last measurement's quality, decaying by MVOD_SCALE_DECAY per step without one. */
+#define MVOD_SCALE_DECAY 0.95
+double mvod_scale_filter_confidence(const struct mvod_scale_filter *f);
+
+#endif

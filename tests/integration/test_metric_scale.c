@@ -1,0 +1,233 @@
+/*
+ * Metric scale with the real binary on mvod-synth, whose street's ground is exactly 1.6 m
+ * below the camera and whose ground truth gives the exact speed: --scale height and
+ * --scale external (speed through a file:// LCM log made by mkspeedlog), their fallbacks
+ * (speed that stops arriving), and bad input (heights, logs of the wrong type or order).
+ */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+
+#define FRAMES 60
+static char dir[256], video[300], calib[300], gt[300];
+
+static int setup(void **state)
+{
+	(void)state;
+	snprintf(dir, sizeof(dir), "%s/street", harness_tmpdir());
+	/* 2 m/s: 0.2 m a frame, so ground 4-10 m ahead is within 50 baselines (scale depth). */
+	harness_synth(dir, "forward", FRAMES, "mkv", "--speed", "2", NULL);
+	snprintf(video, sizeof(video), "file:%s/video.mkv", dir);
+	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
+	snprintf(gt, sizeof(gt), "%s/gt.tum", dir);
+	return 0;
+}
+
+/* mkspeedlog's log of the ground truth's speed at out; extra arguments NULL-terminated. */
+static void speed_log(const char *out, ...)
+{
+	char *argv[16] = {(char *)harness_bin("MVOD_MKSPEEDLOG"), gt, (char *)out};
+	int n = 3;
+	va_list ap;
+	va_start(ap, out);
+	for (char *a; n < 15 && (a = va_arg(ap, char *));)
+		argv[n++] = a;
+	va_end(ap);
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status != 0)
+		fail_msg("mkspeedlog failed (%d): %s", r.status, r.err);
+}
+
+/*
+ * mvod on the street with the scale arguments given (NULL-terminated, at most 6), poses into
+ * est (a TUM file) and LCM into log; returns the run's result.
+ */
+static void run_mvod(struct run_result *r, const char *name, const char *a0, const char *a1,
+		     const char *a2, const char *a3, const char *a4, const char *a5)
+{
+	char lcm[320];
+	snprintf(lcm, sizeof(lcm), "file://%s/%s.lcmlog?mode=w", dir, name);
+	char *argv[24] = {(char *)harness_bin("MVOD"), "--source", video, "--calib", calib, "--gt",
+			  gt, "--trajectory", (char *)harness_tmp_path(name), "--lcm-url", lcm};
+	const char *extra[] = {a0, a1, a2, a3, a4, a5};
+	int n = 11;
+	for (int i = 0; i < 6 && extra[i]; i++)
+		argv[n++] = (char *)extra[i];
+	argv[n] = NULL;
+	assert_int_equal(harness_run(argv, r), 0);
+}
+
+/* The run succeeded; its SE(3) errors (no scale alignment) against the ground truth. */
+static void metric_errors(const struct run_result *r, const char *name, struct traj_errors *e)
+{
+	if (!r->exited || r->status != 0)
+		fail_msg("mvod failed (%d): %s", r->status, r->err);
+	harness_compare(harness_tmp_path(name), gt, 0, e);
+	assert_int_equal(e->n, FRAMES);
+	print_message("%s: ATE %.4f m over %.2f m (%.2f %%), rot %.3f deg/frame\n", name, e->ate_m,
+		      e->length_m, 100 * e->ate_m / e->length_m, e->rpe.rot_deg_mean);
+	/* The summary says the ATE is in metres with no scale alignment. */
+	assert_non_null(strstr(r->out, "no scale alignment"));
+}
+
+/* How many of the log's frames poses have scale source src; all poses finite. */
+static int count_source_in(const char *name, int frames, int src)
+{
+	static mvod_pose_t poses[FRAMES + 8];
+	char path[320];
+	snprintf(path, sizeof(path), "%s/%s.lcmlog", dir, name);
+	int n = harness_poses(path, poses, FRAMES + 8), c = 0;
+	assert_int_equal(n, frames);
+	for (int i = 0; i < n; i++) {
+		for (int k = 0; k < 3; k++)
+			assert_true(isfinite(poses[i].position[k]));
+		c += poses[i].scale_source == src;
+	}
+	return c;
+}
+
+static int count_source(const char *name, int src)
+{
+	return count_source_in(name, FRAMES, src);
+}
+
+static void test_height(void **state)
+{
+	(void)state;
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "height", "--scale", "height", "--camera-height", "1.6", NULL, NULL);
+	metric_errors(&r, "height", &e);
+	assert_true(e.ate_m < 0.03 * e.length_m);
+	assert_true(count_source("height", MVOD_POSE_T_SCALE_HEIGHT) > FRAMES / 2);
+}
+
+static void test_external(void **state)
+{
+	(void)state;
+	char log[300], url[320];
+	snprintf(log, sizeof(log), "%s/speed.lcmlog", dir);
+	snprintf(url, sizeof(url), "file://%s?mode=r", log);
+	speed_log(log, NULL);
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "external", "--scale", "external", "--speed-url", url, NULL, NULL);
+	metric_errors(&r, "external", &e);
+	assert_true(e.ate_m < 0.01 * e.length_m);
+	assert_true(count_source("external", MVOD_POSE_T_SCALE_EXTERNAL) > FRAMES * 3 / 4);
+}
+
+/*
+ * Speed for the first 30 frames only: from then on the steps keep the last scale from
+ * structure, the poses say so (scale source structure), the log says why once, and the path
+ * stays metric to within what structure drifts over 30 frames.
+ */
+static void test_external_speed_stops(void **state)
+{
+	(void)state;
+	char log[300], url[320];
+	snprintf(log, sizeof(log), "%s/speed30.lcmlog", dir);
+	snprintf(url, sizeof(url), "file://%s?mode=r", log);
+	speed_log(log, "--samples", "30", "--no-distance", NULL);
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "stops", "--scale", "external", "--speed-url", url, NULL, NULL);
+	metric_errors(&r, "stops", &e);
+	assert_non_null(strstr(r.err, "no mvod.speed_t on MVOD_SPEED"));
+	int ext = count_source("stops", MVOD_POSE_T_SCALE_EXTERNAL);
+	int str = count_source("stops", MVOD_POSE_T_SCALE_STRUCTURE);
+	/* Frames 31-35 still extrapolate the last speed (within MVOD_SPEED_STALE_US). */
+	assert_true(ext > 20 && ext <= 35);
+	assert_true(str >= 20);
+	/* Measured 5.6 %: structure alone drifts over the second half at 0.2 m a step. */
+	assert_true(e.ate_m < 0.11 * e.length_m);
+}
+
+/* mvod exits with status, and its stderr holds needle. */
+static void refused(const struct run_result *r, int status, const char *needle)
+{
+	if (!r->exited || r->status != status || !strstr(r->err, needle))
+		fail_msg("expected exit %d with \"%s\", got %d: %s", status, needle, r->status,
+			 r->err);
+}
+
+static void test_bad_heights(void **state)
+{
+	(void)state;
+	const char *bad[] = {"-1.6", "1600", "nan", "1.6m"};
+	struct run_result r;
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		run_mvod(&r, "bad", "--scale", "height", "--camera-height", bad[i], NULL, NULL);
+		refused(&r, 2, "camera-height");
+	}
+	run_mvod(&r, "bad", "--scale", "height", NULL, NULL, NULL, NULL);
+	refused(&r, 1, "--scale height needs the camera's height");
+	/* 0 is the key's "none". */
+	run_mvod(&r, "bad", "--scale", "height", "--camera-height", "0", NULL, NULL);
+	refused(&r, 1, "--scale height needs the camera's height");
+}
+
+static void test_bad_speed_sources(void **state)
+{
+	(void)state;
+	struct run_result r;
+	char url[320];
+	run_mvod(&r, "bad", "--scale", "external", "--speed-url", "file:///nonexistent/x.lcmlog",
+		 NULL, NULL);
+	refused(&r, 1, "cannot read the LCM log /nonexistent/x.lcmlog");
+	snprintf(url, sizeof(url), "file://%s/out.lcmlog?mode=w", dir);
+	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
+	refused(&r, 1, "a log to write");
+	run_mvod(&r, "bad", "--scale", "external", "--speed-channel", "", NULL, NULL);
+	refused(&r, 2, "speed-channel");
+}
+
+/*
+ * Logs of the wrong type, with a time going back, on another channel: each a warning naming
+ * it, the run goes on with finite poses.
+ */
+static void test_bad_speed_messages(void **state)
+{
+	(void)state;
+	static const struct {
+		const char *flag, *channel, *needle;
+	} cases[] = {
+		{"--wrong-type", NULL, "are not mvod.speed_t"},
+		{"--decreasing", NULL, "not after the one before"},
+		{"--no-distance", "ELSEWHERE", "no mvod.speed_t on MVOD_SPEED"},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		char log[300], url[320];
+		snprintf(log, sizeof(log), "%s/bad%zu.lcmlog", dir, i);
+		snprintf(url, sizeof(url), "file://%s?mode=r", log);
+		speed_log(log, cases[i].flag, cases[i].channel ? "--channel" : NULL,
+			  cases[i].channel, NULL);
+		struct run_result r;
+		run_mvod(&r, "badmsg", "--scale", "external", "--speed-url", url, "--max-frames",
+			 "15");
+		if (!r.exited || r.status != 0 || !strstr(r.err, cases[i].needle))
+			fail_msg("%s: exit %d, %s", cases[i].needle, r.status, r.err);
+		count_source_in("badmsg", 15, 0); /* every pose finite */
+	}
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_height),
+		cmocka_unit_test(test_external),
+		cmocka_unit_test(test_external_speed_stops),
+		cmocka_unit_test(test_bad_heights),
+		cmocka_unit_test(test_bad_speed_sources),
+		cmocka_unit_test(test_bad_speed_messages),
+	};
+	return cmocka_run_group_tests(tests, setup, harness_teardown);
+}
