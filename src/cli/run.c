@@ -46,24 +46,16 @@ void cli_run_install_signals(void)
 	sigaction(SIGHUP, &hup, NULL);
 }
 
-static void usage(FILE *out)
+static void usage_output(FILE *out)
 {
-	fprintf(out,
-"Usage: mvod [run] --source URI [options]\n"
-"       mvod [run] --config FILE [options]\n"
-"       mvod --list-cameras\n"
-"       mvod calibrate|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
-"Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
-"\n");
-	cli_usage_input(out);
-	cli_usage_vo(out);
 	fprintf(out,
 "Output:\n"
 "  --lcm-url URL         LCM provider (default: $LCM_DEFAULT_URL, then LCM's default);\n"
 "                        e.g. memq:// (in-process), file:///tmp/mvod.lcmlog?mode=w\n"
 "  --no-lcm              do not publish over LCM\n"
-"  --pose-channel NAME   LCM channel of mvod.pose_t (default MVOD_POSE)\n"
-"  --status-channel NAME LCM channel of mvod.status_t (default MVOD_STATUS)\n"
+"  --pose-channel NAME   LCM channel of mvod.pose_t (default MVOD_POSE); mvod.pose2_t goes\n"
+"                        out on the same name with a 2 appended (MVOD_POSE2)\n"
+"  --status-channel NAME LCM channel of mvod.status_t (default MVOD_STATUS); status2_t: +2\n"
 "  --status-rate HZ      mvod.status_t messages per second, 0.1 to 100 (default 1); also\n"
 "                        on every state change\n"
 "  --trajectory FILE     write every pose to FILE (complete lines only, even if killed)\n"
@@ -78,7 +70,22 @@ static void usage(FILE *out)
 "                        origin, level, looking forward: 0,0,0,-0.5,0.5,-0.5,0.5)\n"
 "  --clock monotonic|realtime  time base of a camera's utime (v4l2:, libcamera:): the\n"
 "                        buffer's CLOCK_MONOTONIC (default) or the same instant in Unix time\n"
-"\n"
+"\n");
+}
+
+static void usage(FILE *out)
+{
+	fprintf(out,
+"Usage: mvod [run] --source URI [options]\n"
+"       mvod [run] --config FILE [options]\n"
+"       mvod --list-cameras\n"
+"       mvod calibrate|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
+"Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
+"\n");
+	cli_usage_input(out);
+	cli_usage_vo(out);
+	usage_output(out);
+	fprintf(out,
 "Configuration:\n"
 "  --config FILE         read settings from an INI file (sections [source] [calibration]\n"
 "                        [vo] [lcm] [output] [log], one key per option above); flags\n"
