@@ -378,10 +378,12 @@ static void test_example_config(void **state)
 	int fmt = key_index("output", "format");
 	assert_true(c.set == (((1ULL << mvod_config_nkeys) - 1) & ~(1ULL << fmt)));
 	assert_non_null(c.run.source);
+	/* The config owns the file's trajectory string: put it back for mvod_config_fini. */
+	const char *owned = c.run.trajectory;
 	c.run.trajectory = "/var/lib/mvod/x.kitti";
 	mvod_config_finish(&c);
 	assert_int_equal(c.run.traj_format, MVOD_TRAJ_KITTI);
-	c.run.trajectory = NULL;
+	c.run.trajectory = owned;
 	mvod_config_fini(&c);
 	assert_int_equal(mvod_config_load("/nonexistent/mvod.conf", &c, err, sizeof(err)), -ENOENT);
 	assert_non_null(strstr(err, "/nonexistent/mvod.conf"));
