@@ -288,8 +288,8 @@ static int open_outputs(struct run *r)
 		return ret;
 	}
 	struct mvod_sink m;
-	bool gt_scale = mvod_scale_mode_metric(o->vo.scale_mode); /* metres: no scale alignment */
-	ret = add_sink(r, mvod_sink_eval_create(!gt_scale, r->gt.n, &m), &m, true);
+	bool metric = mvod_scale_mode_metric(o->vo.scale_mode); /* metres: no scale alignment */
+	ret = add_sink(r, mvod_sink_eval_create(!metric, r->gt.n, &m), &m, true);
 	const struct mvod_sink *eval = &r->sinks[0];
 	for (int i = 0; i < o->n_sinks; i++)
 		ret = add_sink(r, ret, &o->sinks[i], false);
@@ -298,7 +298,7 @@ static int open_outputs(struct run *r)
 	if (!ret && r->ipc)
 		ret = add_sink(r, mvod_sink_lcm_create(r->ipc, &r->faults, &m), &m, true);
 	if (!ret && o->plot) {
-		ret = mvod_sink_plot_create(o->plot, o->source, gt_scale, eval, &m);
+		ret = mvod_sink_plot_create(o->plot, o->source, metric, eval, &m);
 		ret = add_sink(r, ret, &m, true);
 	}
 	if (ret || !o->trajectory)

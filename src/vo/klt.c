@@ -330,6 +330,8 @@ void mvod_klt_promote(struct mvod_klt *k)
 
 void mvod_klt_reset(struct mvod_klt *k)
 {
+	if (!k)
+		return;
 	k->n = 0;
 	k->have_prev = 0;
 }

@@ -39,7 +39,7 @@ int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvo
 /* The frame last tracked became the reference: its feature i is track i. */
 void mvod_klt_promote(struct mvod_klt *k);
 
-/* Forgets every track and the previous frame (a gap in the frames). */
+/* Forgets every track and the previous frame (a gap in the frames); NULL: a no-op, as mvod_mapvo_reset. */
 void mvod_klt_reset(struct mvod_klt *k);
 
 #endif

@@ -320,8 +320,7 @@ void mvod_vo_restart(struct mvod_vo *vo)
 {
 	vo->have_ref = 0;
 	vo->state = MVOD_STATE_INITIALIZING;
-	if (vo->klt)
-		mvod_klt_reset(vo->klt);
+	mvod_klt_reset(vo->klt);
 	mvod_mapvo_reset(vo->mapvo);
 }
 
@@ -389,10 +388,10 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 	if (vo->klt && vo->ref == tracked)
 		mvod_klt_promote(vo->klt);
 	/* Map mode: TRACKING means against a map; two-view frames only keep the pose going. */
-	if (vo->mapvo)
+	if (vo->mapvo) {
 		vo->state = made_map ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING;
-	if (vo->mapvo)
 		map_counts(vo, res);
+	}
 	res->pose = vo->pose;
 	res->state = vo->state;
 	report_scale(vo, res);
