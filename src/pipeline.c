@@ -246,6 +246,9 @@ static int open_inputs(struct run *r)
 		LOG(ERROR, "%s: %s", o->source, err);
 		return ret;
 	}
+	r->sum->frontend = mvod_vo_frontend(&o->vo);
+	LOG(INFO, "front end: %s%s", mvod_frontend_names[r->sum->frontend],
+	    o->vo.frontend == MVOD_FRONTEND_AUTO ? " (--frontend auto)" : "");
 	ret = mvod_vo_create(&o->vo, &r->cam, &r->vo);
 	if (ret)
 		LOG(ERROR, "cannot set up visual odometry for %dx%d: %s", r->cam.width,

@@ -103,6 +103,7 @@ struct mvod_run_summary {
 	 * edit of the configuration fixes it, a restart does not (the daemon's exit status 3).
 	 */
 	bool calib_failed;
+	enum mvod_frontend frontend; /* the front end that ran: --frontend auto resolved */
 	bool live;       /* frames came through the capture thread */
 	int64_t dropped; /* frames a live source produced that were not processed */
 	/* frames of a dataset source skipped, by mvod_bad_frame reason (live: in dropped) */

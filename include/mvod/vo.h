@@ -70,8 +70,13 @@ extern const char *const mvod_robust_names[];
  * Lucas-Kanade (src/vo/klt.h), which needs no descriptors and no matching.
  */
 enum mvod_frontend {
-	MVOD_FRONTEND_ORB = 0, /* the descriptor front end: the default */
+	MVOD_FRONTEND_ORB = 0, /* the descriptor front end */
 	MVOD_FRONTEND_KLT = 1,
+	/*
+	 * The default: mvod_vo_frontend picks one of the two when the VO is created. KLT won on
+	 * every figure of BENCHMARKS.md ("The default front end") where it applies.
+	 */
+	MVOD_FRONTEND_AUTO = 2,
 };
 /* The front ends' names in enum order, NULL-terminated (the config file's choices). */
 extern const char *const mvod_frontend_names[];
@@ -131,7 +136,7 @@ struct mvod_vo_params {
 	enum mvod_vo_mode mode; /* TWOVIEW */
 	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
-	enum mvod_frontend frontend; /* ORB */
+	enum mvod_frontend frontend; /* AUTO */
 	enum mvod_detector detector; /* ORB; the descriptor front end's */
 	int max_features;       /* feature cap of the descriptor front end. 2000 */
 	int max_tracks;         /* track cap of the KLT front end. 500 */
@@ -148,6 +153,27 @@ struct mvod_vo_params {
 	double camera_height_m; /* HEIGHT: the camera's height above the ground, metres. 0 */
 };
 void mvod_vo_params_default(struct mvod_vo_params *p);
+
+/*
+ * The flag of the first option only the descriptor front end reads (detector, matcher,
+ * features, ratio, best) whose value in p is not its default, or NULL when all are defaults.
+ * Compared by value, not by whether it was given, since a file written by --print-config
+ * gives every key.
+ */
+const char *mvod_vo_descriptor_option(const struct mvod_vo_params *p);
+/* Those options' flags, NULL-terminated. */
+extern const char *const mvod_vo_descriptor_flags[];
+/*
+ * The front end p runs: p->frontend, or for AUTO, orb in map mode (which matches its points by
+ * descriptor) or when a descriptor option is not its default (the user asked for descriptors),
+ * klt otherwise. mvod_vo_create resolves it once; the run loop logs it.
+ */
+enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p);
+/*
+ * Whether the options fit the front end: --frontend klt with a descriptor option set is
+ * -EINVAL naming both in err (the option would be silently ignored).
+ */
+int mvod_vo_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen);
 
 struct mvod_vo_result {
 	struct mvod_pose pose; /* camera-to-world of this frame */

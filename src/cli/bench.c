@@ -88,16 +88,16 @@ static void usage(FILE *out)
 
 /* The table: one column list for Markdown and CSV. */
 enum col {
-	C_DETECTOR, C_MATCHER, C_FEATURES, C_RESIZE, C_BLUR, C_RATIO, C_FRAMES, C_ERR_AVG,
+	C_DETECTOR, C_MATCHER, C_FEATURES, C_RESIZE, C_BLUR, C_RATIO, C_MODE, C_FRAMES, C_ERR_AVG,
 	C_ERR_MAX, C_RPE_ROT, C_RPE_DIR, C_RPE_PCT, C_ATE_M, C_ATE_PCT, C_DRIFT, C_T_REL, C_R_REL,
 	C_FPS, C_MEDIAN, C_P95, C_STAGE0, NCOLS = C_STAGE0 + MVOD_STAGE_COUNT,
 };
 static const char *const col_md[C_STAGE0] = {
-	"detector", "matcher", "features", "resize", "blur", "ratio", "frames", "err_avg",
+	"detector", "matcher", "features", "resize", "blur", "ratio", "mode", "frames", "err_avg",
 	"err_max", "RPE rot deg", "RPE dir deg", "RPE trans %", "ATE m", "ATE %", "scale drift",
 	"t_rel %", "r_rel deg/100m", "fps", "median ms", "p95 ms"};
 static const char *const col_csv[C_STAGE0] = {
-	"detector", "matcher", "features", "resize", "blur", "ratio", "frames", "err_avg",
+	"detector", "matcher", "features", "resize", "blur", "ratio", "mode", "frames", "err_avg",
 	"err_max", "rpe_rot_deg", "rpe_dir_deg", "rpe_trans_pct", "ate_m", "ate_pct",
 	"scale_drift", "t_rel_pct", "r_rel_deg_100m", "fps", "frame_ms_median", "frame_ms_p95"};
 
@@ -111,9 +111,9 @@ struct row {
 #define MAX_CONFIGS 512
 
 /* Grid keys: run options (flags of the config table) that a sweep may vary. */
-static const char *const grid_keys[] = {"detector", "matcher", "features", "ratio",
-					"best",     "resize",  "blur"};
-#define GRID_KEYS ((int)(sizeof(grid_keys) / sizeof(grid_keys[0])))
+static const char *const grid_keys[] = {"mode",  "frontend", "detector", "matcher", "features",
+					"ratio", "best",     "tracks",   "resize",  "blur", NULL};
+#define GRID_KEYS_TEXT "mode, frontend, detector, matcher, features, ratio, best, tracks, resize, blur"
 
 /* One axis of a sub-grid: an option and its values (pointers into the grid's copy). */
 struct axis {
@@ -139,24 +139,32 @@ static int grid_error(const char *what, const char *text)
 	return -EINVAL;
 }
 
+static int config_key(const char *flag)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++)
+		if (strcmp(mvod_config_keys[k].flag, flag) == 0)
+			return k;
+	return -1;
+}
+
+static bool in_list(const char *s, const char *const *list)
+{
+	for (int i = 0; list[i]; i++)
+		if (strcmp(s, list[i]) == 0)
+			return true;
+	return false;
+}
+
 /* Checks key=value with the very parser the option uses, so a typo fails before any run. */
 static int check_value(const char *key, const char *value)
 {
-	for (int g = 0; g < GRID_KEYS; g++) {
-		if (strcmp(key, grid_keys[g]) != 0)
-			continue;
-		for (int k = 0; k < mvod_config_nkeys; k++) {
-			if (strcmp(mvod_config_keys[k].flag, key) != 0)
-				continue;
-			struct mvod_config scratch;
-			mvod_config_default(&scratch);
-			int ret = cli_parse_key(k, value, &scratch);
-			mvod_config_fini(&scratch);
-			return ret;
-		}
-	}
-	return grid_error("unknown key (detector, matcher, features, ratio, best, resize, blur)",
-			  key);
+	if (!in_list(key, grid_keys))
+		return grid_error("unknown key (" GRID_KEYS_TEXT ")", key);
+	struct mvod_config scratch;
+	mvod_config_default(&scratch);
+	int ret = cli_parse_key(config_key(key), value, &scratch);
+	mvod_config_fini(&scratch);
+	return ret;
 }
 
 static int parse_axis(char *text, struct axis *a)
@@ -175,8 +183,48 @@ static int parse_axis(char *text, struct axis *a)
 	return a->n ? 0 : grid_error("no values for", a->key);
 }
 
-/* Appends the cross product of the axes to the sweep. */
-static int expand(const struct axis *ax, int n_ax, struct sweep *sw)
+/*
+ * Drops from c the options its front end does not read, so that no two rows differ only by
+ * an ignored axis: the descriptor options where klt runs, --tracks where orb does. base: the
+ * options every run shares. -EINVAL when they clash with the front end (--detector for klt).
+ */
+static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
+{
+	static const char *const klt_only[] = {"tracks", NULL};
+	struct mvod_config scratch;
+	mvod_config_default(&scratch);
+	scratch.run.vo = *base;
+	char err[256];
+	for (int i = 0; i + 1 < c->n; i += 2) /* values were checked by parse_axis */
+		mvod_config_set(&scratch, config_key(c->args[i] + 2), c->args[i + 1], err, sizeof(err));
+	bool klt = mvod_vo_frontend(&scratch.run.vo) == MVOD_FRONTEND_KLT;
+	const char *const *ignored = klt ? mvod_vo_descriptor_flags : klt_only;
+	int n = 0;
+	for (int i = 0; i + 1 < c->n; i += 2) {
+		if (in_list(c->args[i] + 2, ignored))
+			continue;
+		memmove(c->args[n++], c->args[i], sizeof(c->args[0]));
+		memmove(c->args[n++], c->args[i + 1], sizeof(c->args[0]));
+	}
+	c->n = n;
+	if (!klt || !mvod_vo_check_frontend(base, err, sizeof(err)))
+		return 0;
+	fprintf(stderr, "%s: --sweep: %s; see %s --help\n", cli_prog, err, cli_prog);
+	return -EINVAL;
+}
+
+static bool seen(const struct sweep *sw, const struct config *c)
+{
+	for (int i = 0; i < sw->n; i++)
+		if (&sw->cfg[i] != c && sw->cfg[i].n == c->n &&
+		    !memcmp(sw->cfg[i].args, c->args, (size_t)c->n * sizeof(c->args[0])))
+			return true;
+	return false;
+}
+
+/* Appends the cross product of the axes to the sweep, each configuration once. */
+static int expand(const struct axis *ax, int n_ax, const struct mvod_vo_params *base,
+		  struct sweep *sw)
 {
 	int idx[MAX_AXES] = {0};
 	for (;;) {
@@ -188,6 +236,10 @@ static int expand(const struct axis *ax, int n_ax, struct sweep *sw)
 			snprintf(c->args[c->n++], sizeof(c->args[0]), "--%s", ax[k].key);
 			snprintf(c->args[c->n++], sizeof(c->args[0]), "%s", ax[k].values[idx[k]]);
 		}
+		if (fit_frontend(base, c))
+			return -EINVAL;
+		if (seen(sw, c))
+			sw->n--;
 		int k = n_ax - 1;
 		while (k >= 0 && ++idx[k] == ax[k].n)
 			idx[k--] = 0;
@@ -196,7 +248,7 @@ static int expand(const struct axis *ax, int n_ax, struct sweep *sw)
 	}
 }
 
-static int parse_subgrid(char *text, struct sweep *sw)
+static int parse_subgrid(char *text, const struct mvod_vo_params *base, struct sweep *sw)
 {
 	struct axis ax[MAX_AXES];
 	int n = 0;
@@ -206,17 +258,17 @@ static int parse_subgrid(char *text, struct sweep *sw)
 		if (parse_axis(a, &ax[n++]))
 			return -EINVAL;
 	}
-	return n ? expand(ax, n, sw) : grid_error("empty grid in", "GRID");
+	return n ? expand(ax, n, base, sw) : grid_error("empty grid in", "GRID");
 }
 
 /* grid_copy: writable copy of the grid; the configurations point into it until expanded. */
-static int parse_grid(char *grid_copy, struct sweep *sw)
+static int parse_grid(char *grid_copy, const struct mvod_vo_params *base, struct sweep *sw)
 {
 	sw->n = 0;
 	char *save;
 	for (char *g = strtok_r(grid_copy, "|", &save); g; g = strtok_r(NULL, "|", &save)) {
 		/* Each sub-grid has its own strtok_r state; the outer one is kept in save. */
-		int ret = parse_subgrid(g, sw);
+		int ret = parse_subgrid(g, base, sw);
 		if (ret)
 			return ret;
 	}
@@ -315,6 +367,8 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 			     &b->quiet);
 	if (!ret)
 		ret = reject_run_only(&b->cfg);
+	if (!ret)
+		ret = cli_check_frontend(&b->cfg);
 	if (ret)
 		return ret;
 	mvod_config_finish(&b->cfg);
@@ -331,7 +385,7 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 		return 0;
 	b->grid_copy = strdup(b->grid);
 	b->sw = calloc(1, sizeof(*b->sw));
-	return b->grid_copy && b->sw ? parse_grid(b->grid_copy, b->sw) : -ENOMEM;
+	return b->grid_copy && b->sw ? parse_grid(b->grid_copy, &b->cfg.run.vo, b->sw) : -ENOMEM;
 }
 
 /* --- one configuration --- */
@@ -454,7 +508,8 @@ static void config_cells(const struct mvod_vo_params *p, struct row *r)
 	cell(r, C_RESIZE, "%g", p->resize);
 	cell(r, C_BLUR, "%.0f", p->blur_ksize);
 	cell(r, C_RATIO, "%g", mvod_matcher_uses_ratio(p->matcher) ? p->ratio : NAN);
-	if (p->frontend == MVOD_FRONTEND_KLT) { /* no descriptors, no matcher: the track cap */
+	snprintf(r->f[C_MODE], sizeof(r->f[0]), "%s", mvod_vo_mode_names[p->mode]);
+	if (mvod_vo_frontend(p) == MVOD_FRONTEND_KLT) { /* no descriptors, no matcher: the track cap */
 		strcpy(r->f[C_DETECTOR], "klt");
 		strcpy(r->f[C_MATCHER], "-");
 		strcpy(r->f[C_RATIO], "-");
@@ -800,15 +855,18 @@ static int sweep_one(const struct bench *b, const struct config *c, const char *
 	return ret;
 }
 
-/* "sift flann-ratio 0.6, 3000", and the image scale and blur where they are not 1 and 0. */
+/*
+ * "sift flann-ratio 0.6, 3000", and the image scale, blur and mode where they are not 1, 0
+ * and twoview.
+ */
 static void point_text(const struct row *r, char *buf, size_t len)
 {
 	bool ratio = strcmp(r->f[C_RATIO], "-") != 0, resized = strcmp(r->f[C_RESIZE], "1") != 0;
-	bool blurred = strcmp(r->f[C_BLUR], "0") != 0;
-	snprintf(buf, len, "%s %s%s%s, %s%s%s%s%s", r->f[C_DETECTOR], r->f[C_MATCHER],
+	bool blurred = strcmp(r->f[C_BLUR], "0") != 0, map = strcmp(r->f[C_MODE], "map") == 0;
+	snprintf(buf, len, "%s %s%s%s, %s%s%s%s%s%s", r->f[C_DETECTOR], r->f[C_MATCHER],
 		 ratio ? " " : "", ratio ? r->f[C_RATIO] : "", r->f[C_FEATURES],
 		 resized ? ", x" : "", resized ? r->f[C_RESIZE] : "", blurred ? ", blur " : "",
-		 blurred ? r->f[C_BLUR] : "");
+		 blurred ? r->f[C_BLUR] : "", map ? ", map" : "");
 }
 
 /* One point per configuration: err_avg against median frame time. */

@@ -145,9 +145,12 @@ void cli_usage_vo(FILE *out)
 "  --speed-channel NAME  LCM channel of mvod.speed_t (default MVOD_SPEED)\n"
 "  --speed-url URL       where speed comes from: an LCM URL, or file://LOG?mode=r to read\n"
 "                        a log (matched to frames by utime); default: the --lcm-url\n"
-"  --frontend orb|klt    features matched by descriptor in every frame (orb, default: the\n"
-"                        --detector and --matcher below) or FAST corners tracked frame to\n"
-"                        frame by pyramidal Lucas-Kanade (klt; --tracks caps them)\n"
+"  --frontend auto|klt|orb  klt: FAST corners tracked frame to frame by pyramidal\n"
+"                        Lucas-Kanade (--tracks caps them); orb: features matched by\n"
+"                        descriptor in every frame (--detector, --matcher, --features,\n"
+"                        --ratio, --best below apply to it alone, and klt refuses them);\n"
+"                        auto (default): klt, but orb in --mode map or when one of those\n"
+"                        five options is given a value other than its default\n"
 "  --detector orb|sift   keypoints and descriptors: ORB (default; binary, fast) or SIFT\n"
 "  --matcher M           how features of consecutive frames are paired (default bf):\n"
 "                          bf          brute force, ratio test and cross-check\n"
@@ -157,7 +160,7 @@ void cli_usage_vo(FILE *out)
 "                          flann       FLANN nearest neighbour, unfiltered (LSH 6/12/1 for\n"
 "                                      ORB, 5 kd-trees for SIFT)\n"
 "                          flann-ratio FLANN with the ratio test\n"
-"  --features N          feature cap of the orb front end (default 2000)\n"
+"  --features N          feature cap of the descriptor front end (default 2000)\n"
 "  --tracks N            track cap of the klt front end (default 500)\n"
 "  --ratio R             Lowe's ratio test threshold, 1 = off (default 0.8)\n"
 "  --best N              matches kept by bf-cross, 0 = all (default 200)\n"
@@ -181,6 +184,15 @@ void cli_usage_general(FILE *out)
 "  -h, --help            this text\n"
 "  --version             print the version\n"
 "\n");
+}
+
+int cli_check_frontend(const struct mvod_config *cfg)
+{
+	char err[256];
+	if (!mvod_vo_check_frontend(&cfg->run.vo, err, sizeof(err)))
+		return 0;
+	fprintf(stderr, "%s: %s; see %s --help\n", cli_prog, err, cli_prog);
+	return -EINVAL;
 }
 
 int cli_parse_key(int k, const char *arg, struct mvod_config *cfg)

@@ -66,6 +66,9 @@ void cli_usage_input(FILE *out);
 void cli_usage_vo(FILE *out);
 void cli_usage_general(FILE *out);
 
+/* --frontend klt with a descriptor option: -EINVAL after saying which (mvod_vo_check_frontend). */
+int cli_check_frontend(const struct mvod_config *cfg);
+
 /*
  * Sets config key k from a flag's argument (NULL for a flag without one). Returns 0, or
  * -EINVAL after printing "--flag VALUE: expected ...".

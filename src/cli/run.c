@@ -159,7 +159,7 @@ static int load_config(struct cli *c, struct mvod_config *cfg)
 	mvod_config_override(cfg, &c->flags);
 	mvod_config_finish(cfg);
 	mvod_config_apply_log(cfg);
-	return 0;
+	return cli_check_frontend(cfg);
 }
 
 /* 0 to run, 1 when help/version was printed, -EINVAL on a usage error. */
@@ -229,8 +229,9 @@ static void print_accuracy(const struct mvod_config *c, const struct mvod_run_su
 
 static void print_summary(const struct mvod_config *c, const struct mvod_run_summary *s)
 {
-	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held",
-	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held);
+	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held, front end %s",
+	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held,
+	       mvod_frontend_names[s->frontend]);
 	if (s->live)
 		printf(", %lld dropped", (long long)s->dropped);
 	print_skipped(s);

@@ -47,7 +47,7 @@ const char *mvod_scale_source_name(enum mvod_scale_source s)
 	return (unsigned)s < sizeof(names) / sizeof(names[0]) ? names[s] : "unknown";
 }
 
-const char *const mvod_frontend_names[] = {"orb", "klt", NULL};
+const char *const mvod_frontend_names[] = {"orb", "klt", "auto", NULL};
 const char *const mvod_detector_names[] = {"orb", "sift", NULL};
 const char *const mvod_matcher_names[MVOD_MATCHER_COUNT + 1] = {"bf", "bf-cross", "bf-ratio",
 								"flann", "flann-ratio", NULL};
@@ -71,7 +71,7 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 		.mode = MVOD_VO_TWOVIEW,
 		.resize = 1.0,
 		.blur_ksize = 0,
-		.frontend = MVOD_FRONTEND_ORB,
+		.frontend = MVOD_FRONTEND_AUTO,
 		.detector = MVOD_DETECTOR_ORB,
 		.max_features = 2000,
 		.max_tracks = 500,
@@ -86,6 +86,43 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 		.min_parallax_px = 1.0,
 		.scale_mode = MVOD_SCALE_MODE_AUTO,
 	};
+}
+
+const char *const mvod_vo_descriptor_flags[] = {"detector", "matcher", "features", "ratio",
+						 "best", NULL};
+
+const char *mvod_vo_descriptor_option(const struct mvod_vo_params *p)
+{
+	struct mvod_vo_params d;
+	mvod_vo_params_default(&d);
+	/* In the order of mvod_vo_descriptor_flags. */
+	bool differs[] = {p->detector != d.detector, p->matcher != d.matcher,
+			  p->max_features != d.max_features, p->ratio != d.ratio,
+			  p->best_n != d.best_n};
+	for (int i = 0; mvod_vo_descriptor_flags[i]; i++)
+		if (differs[i])
+			return mvod_vo_descriptor_flags[i];
+	return NULL;
+}
+
+/* The one place auto is decided: map mode takes klt here once it tracks KLT. */
+enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p)
+{
+	if (p->frontend != MVOD_FRONTEND_AUTO)
+		return p->frontend;
+	if (p->mode == MVOD_VO_MAP || mvod_vo_descriptor_option(p))
+		return MVOD_FRONTEND_ORB;
+	return MVOD_FRONTEND_KLT;
+}
+
+int mvod_vo_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen)
+{
+	const char *opt = mvod_vo_descriptor_option(p);
+	if (p->frontend != MVOD_FRONTEND_KLT || !opt)
+		return 0;
+	return mvod_errf(err, errlen, -EINVAL, "--%s is an option of the descriptor front end, "
+			 "which --frontend klt does not run: drop --%s, or use --frontend orb (or "
+			 "auto, which then picks orb)", opt, opt);
 }
 
 bool mvod_vo_tracked(const struct mvod_vo_result *res)
@@ -148,7 +185,10 @@ int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_ca
 		return mvod_errf(err, errlen, -EINVAL, "--mode map keeps ORB descriptors in its map, "
 				 "not %s: use --detector orb or --mode twoview",
 				 mvod_detector_name(params->detector));
-	if (params->mode == MVOD_VO_MAP && params->frontend == MVOD_FRONTEND_KLT)
+	int ret = mvod_vo_check_frontend(params, err, errlen);
+	if (ret)
+		return ret;
+	if (params->mode == MVOD_VO_MAP && mvod_vo_frontend(params) == MVOD_FRONTEND_KLT)
 		return mvod_errf(err, errlen, -EINVAL, "--mode map matches its points by ORB "
 				 "descriptors, which --frontend klt does not compute for every frame: "
 				 "use --frontend orb or --mode twoview");
@@ -193,13 +233,15 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 	if (!vo)
 		return -ENOMEM;
 	vo->p = *params;
+	vo->p.frontend = mvod_vo_frontend(params);
 	/* ORB and SIFT may return a few more than asked for (ties); the cap leaves room. */
-	int n = params->frontend == MVOD_FRONTEND_KLT ? params->max_tracks : params->max_features;
+	bool klt = vo->p.frontend == MVOD_FRONTEND_KLT;
+	int n = klt ? params->max_tracks : params->max_features;
 	vo->cap = n + n / 4 + 16;
 	int ret = mvod_cv_preproc_create(cam, params->resize, params->blur_ksize, &vo->cam, &vo->pre);
 	if (ret)
 		goto fail;
-	ret = params->frontend == MVOD_FRONTEND_KLT ? klt_create(vo) : descriptors_create(vo);
+	ret = klt ? klt_create(vo) : descriptors_create(vo);
 	if (ret)
 		goto fail;
 	ret = alloc_buffers(vo);

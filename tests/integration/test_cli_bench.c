@@ -17,7 +17,7 @@
 #include "harness.h"
 
 #define FRAMES 40
-#define NCOLS 25
+#define NCOLS 26
 
 static char dir[256], video[300], calib[300], gt_tum[300], gt_kitti[300];
 
