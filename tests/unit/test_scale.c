@@ -216,6 +216,8 @@ static struct mvod_vo *make_vo(enum mvod_scale_mode mode)
 {
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
+	/* The seam below the detector takes keypoints with descriptors: the descriptor front end. */
+	p.frontend = MVOD_FRONTEND_ORB;
 	p.scale_mode = mode;
 	p.camera_height_m = GROUND_Y;
 	struct mvod_vo *vo = NULL;

@@ -10,6 +10,7 @@
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -105,6 +106,8 @@ static struct mvod_vo *make_vo(enum mvod_scale_mode scale)
 {
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
+	/* The seam below the detector takes keypoints with descriptors: the descriptor front end. */
+	p.frontend = MVOD_FRONTEND_ORB;
 	p.scale_mode = scale;
 	struct mvod_vo *vo = NULL;
 	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
@@ -375,6 +378,48 @@ static void test_seam_refuses_bad_features(void **state)
 }
 
 /*
+ * --frontend auto: klt in two-view mode with the descriptor options at their defaults; orb in
+ * map mode and as soon as any one of the five descriptor options differs; an explicit choice
+ * stays. --frontend klt with a descriptor option is refused naming both.
+ */
+static void test_frontend_auto(void **state)
+{
+	(void)state;
+	struct mvod_vo_params p, d;
+	mvod_vo_params_default(&d);
+	assert_int_equal(d.frontend, MVOD_FRONTEND_AUTO);
+	assert_int_equal(mvod_vo_frontend(&d), MVOD_FRONTEND_KLT);
+	assert_null(mvod_vo_descriptor_option(&d));
+	p = d;
+	p.mode = MVOD_VO_MAP;
+	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
+	for (int i = 0; mvod_vo_descriptor_flags[i]; i++) {
+		p = d;
+		switch (i) {
+		case 0: p.detector = MVOD_DETECTOR_SIFT; break;
+		case 1: p.matcher = MVOD_MATCHER_FLANN; break;
+		case 2: p.max_features = 3000; break;
+		case 3: p.ratio = 0.7; break;
+		default: p.best_n = 100; break;
+		}
+		assert_string_equal(mvod_vo_descriptor_option(&p), mvod_vo_descriptor_flags[i]);
+		assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
+		char err[256] = "";
+		assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+		p.frontend = MVOD_FRONTEND_KLT;
+		assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
+		assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+		char flag[32];
+		snprintf(flag, sizeof(flag), "--%s", mvod_vo_descriptor_flags[i]);
+		assert_non_null(strstr(err, flag));
+		assert_non_null(strstr(err, "--frontend klt"));
+	}
+	p = d;
+	p.frontend = MVOD_FRONTEND_ORB;
+	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
+}
+
+/*
  * Quality: inliers against MVOD_QUALITY_INLIERS x min_inliers, clamped to [0, 1], and 0 for
  * every pose that is not tracked: held frames, and rotations before tracking began.
  */
@@ -409,6 +454,7 @@ static void test_quality(void **state)
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_frontend_auto),
 		cmocka_unit_test(test_quality),
 		cmocka_unit_test(test_first_frame),
 		cmocka_unit_test(test_few_features_make_no_reference),
