@@ -23,26 +23,32 @@
 #include "util/output.h"
 
 /*
- * The default sweep: sub-grids joined by '|', each a cross product. Chosen to cover every
- * detector x matcher with the reference implementation's ratios (ORB 0.7, SIFT 0.6) at two
- * feature caps, mvod's default configuration and its extremes (10 000 ORB, 50 and 6 000
- * SIFT), and image scale and blur on mvod's default: 29 runs, about 9 minutes on the 160-frame
- * KITTI 07 clip on 2 cores.
+ * The default sweep: sub-grids joined by '|', each a cross product. Chosen to cover mvod's
+ * default (the klt front end) at three track caps and half the image, and for the descriptor
+ * front end every detector x matcher with the reference implementation's ratios (ORB 0.7,
+ * SIFT 0.6) at two feature caps, its defaults and extremes (10 000 ORB, 50 and 6 000 SIFT),
+ * and image scale and blur: 33 runs, about 10 minutes on the 160-frame KITTI 07 clip on 2
+ * cores.
  */
 static const char default_grid[] =
-	"detector=orb;matcher=bf,bf-cross,bf-ratio,flann,flann-ratio;features=1000,3000;ratio=0.7"
-	"|detector=orb;matcher=bf;ratio=0.8;features=2000,10000"
-	"|detector=orb;matcher=bf;ratio=0.8;features=2000;resize=0.5,0.25"
-	"|detector=orb;matcher=bf;ratio=0.8;features=2000;blur=3,9,11"
-	"|detector=sift;matcher=bf,bf-cross,bf-ratio,flann,flann-ratio;features=1000,3000;ratio=0.6"
-	"|detector=sift;matcher=bf-ratio;ratio=0.6;features=50,6000";
+	"frontend=klt;tracks=250,500,1000"
+	"|frontend=klt;tracks=500;resize=0.5"
+	"|frontend=orb;detector=orb;matcher=bf,bf-cross,bf-ratio,flann,flann-ratio;"
+	"features=1000,3000;ratio=0.7"
+	"|frontend=orb;detector=orb;matcher=bf;ratio=0.8;features=2000,10000"
+	"|frontend=orb;detector=orb;matcher=bf;ratio=0.8;features=2000;resize=0.5,0.25"
+	"|frontend=orb;detector=orb;matcher=bf;ratio=0.8;features=2000;blur=3,9,11"
+	"|frontend=orb;detector=sift;matcher=bf,bf-cross,bf-ratio,flann,flann-ratio;"
+	"features=1000,3000;ratio=0.6"
+	"|frontend=orb;detector=sift;matcher=bf-ratio;ratio=0.6;features=50,6000";
 
 static void usage(FILE *out)
 {
 	fprintf(out,
 "Usage: mvod bench --source URI [--gt FILE] [options] [--sweep [GRID]]\n"
 "Runs the pipeline (no LCM) against ground truth and prints one table row per configuration:\n"
-"detector, matcher, feature cap, image scale, blur, ratio; err_avg and err_max (issue 5's\n"
+"detector (klt for the klt front end), matcher, feature cap (klt: track cap), image scale,\n"
+"blur, ratio, mode; err_avg and err_max (issue 5's\n"
 "per-frame e = (r + d) / (0.5 + r + d)), RPE (rotation deg, direction deg, translation %%),\n"
 "ATE (m and %% of the path; SE(3)-aligned, no scale alignment, with --scale gt, height or\n"
 "external; Sim(3) with auto), scale drift (largest over smallest path-length ratio to the\n"
@@ -59,8 +65,11 @@ static void usage(FILE *out)
 "  --sweep [GRID]        run a grid of configurations, one fresh process each, one after\n"
 "                        the other; print them sorted by err_avg. GRID: axes 'key=v1,v2'\n"
 "                        joined by ';' make a cross product; '|' joins cross products. Keys:\n"
-"                        detector, matcher, features, ratio, best, resize, blur. The other\n"
-"                        options apply to every run. Default (29 runs, ~9 min on KITTI 07):\n");
+"                        mode, frontend, detector, matcher, features, ratio, best, tracks,\n"
+"                        resize, blur. The other options apply to every run. Where klt runs\n"
+"                        the descriptor keys (detector, matcher, features, ratio, best) are\n"
+"                        dropped, where orb runs tracks is, and each configuration that is\n"
+"                        left runs once. Default (33 runs, ~10 min on KITTI 07):\n");
 	for (const char *g = default_grid; *g;) {
 		size_t n = strcspn(g + 1, "|") + 1;
 		fprintf(out, "                          %.*s\n", (int)n, g);
