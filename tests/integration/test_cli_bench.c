@@ -113,7 +113,8 @@ static void test_one_configuration(void **state)
 			assert_string_not_equal(cells[0][c], "-");
 	}
 	assert_string_equal(cells[0][column(header, "t_rel_pct")], "-");
-	assert_string_equal(cells[0][column(header, "detector")], "orb");
+	/* The default front end on a two-view run: klt (--frontend auto). */
+	assert_string_equal(cells[0][column(header, "detector")], "klt");
 	assert_int_equal(atoi(cells[0][column(header, "frames")]), FRAMES);
 	/*
 	 * Measured 0.045 (ORB 2000, 0.1 m steps on exact frames: r ~0.04 deg and d ~1 cm per
@@ -176,6 +177,49 @@ static void test_sweep_two_configurations(void **state)
 	assert_non_null(strstr(r.out, "| orb | bf-cross best 200 |"));
 	/* Each run was a process of its own, and said so. */
 	assert_non_null(strstr(r.err, "[2/2]"));
+}
+
+/*
+ * The front end as a sweep axis: klt rows drop the descriptor axes and orb rows the track cap,
+ * so 2 x 2 x 2 axes give 4 runs, not 8; an option klt would ignore, shared by a klt run, is a
+ * usage error before any run, naming both options.
+ */
+static void test_sweep_frontend_axis(void **state)
+{
+	(void)state;
+	const char *csv = harness_tmp_path("frontend.csv");
+	struct run_result r;
+	bench(&r, gt_kitti, "--scale", "gt", "--max-frames", "10", "--sweep",
+	      "frontend=klt,orb;matcher=bf,bf-cross;tracks=200,300", "--csv", csv, NULL);
+	if (r.status != 0)
+		fail_msg("mvod bench --sweep failed (%d): %s", r.status, r.err);
+	assert_non_null(strstr(r.err, "[4/4]"));
+	char cells[5][NCOLS][40], header[4096];
+	assert_int_equal(read_csv(csv, cells, 5, header, sizeof(header)), 4);
+	int d = column(header, "detector"), m = column(header, "matcher");
+	int f = column(header, "features"), mode = column(header, "mode");
+	int klt200 = 0, klt300 = 0, bf = 0, cross = 0;
+	for (int i = 0; i < 4; i++) {
+		assert_string_equal(cells[i][mode], "twoview");
+		bool klt = strcmp(cells[i][d], "klt") == 0;
+		if (klt)
+			assert_string_equal(cells[i][m], "-");
+		else
+			assert_string_equal(cells[i][f], "2000");
+		klt200 += klt && strcmp(cells[i][f], "200") == 0;
+		klt300 += klt && strcmp(cells[i][f], "300") == 0;
+		bf += !klt && strcmp(cells[i][m], "bf") == 0;
+		cross += !klt && strcmp(cells[i][m], "bf-cross best 200") == 0;
+	}
+	assert_true(klt200 == 1 && klt300 == 1 && bf == 1 && cross == 1);
+	const char *clash[][2] = {{"--frontend=klt", "--ratio=0.7"}, {"--ratio=0.7", "--sweep=frontend=klt"}};
+	for (int i = 0; i < 2; i++) {
+		bench(&r, gt_kitti, clash[i][0], clash[i][1], NULL);
+		assert_int_equal(r.status, 2);
+		assert_non_null(strstr(r.err, "--ratio"));
+		assert_non_null(strstr(r.err, "--frontend klt"));
+		assert_null(strstr(r.err, "[1/"));
+	}
 }
 
 static const char *write_file(const char *name, const char *text)
@@ -297,6 +341,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_one_configuration),
 		cmocka_unit_test(test_sweep_two_configurations),
+		cmocka_unit_test(test_sweep_frontend_axis),
 		cmocka_unit_test(test_bad_ground_truth),
 		cmocka_unit_test(test_bad_usage),
 		cmocka_unit_test(test_table_reader_gone),
