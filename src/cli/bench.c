@@ -216,7 +216,9 @@ static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
 		memmove(c->args[n++], c->args[i + 1], sizeof(c->args[0]));
 	}
 	c->n = n;
-	if (!klt || !mvod_vo_check_frontend(base, err, sizeof(err)))
+	struct mvod_vo_params shared = *base; /* what c itself sets is dropped or is klt's */
+	shared.frontend = MVOD_FRONTEND_KLT;
+	if (!klt || !mvod_vo_check_frontend(&shared, err, sizeof(err)))
 		return 0;
 	fprintf(stderr, "%s: --sweep: %s; see %s --help\n", cli_prog, err, cli_prog);
 	return -EINVAL;

