@@ -537,9 +537,9 @@ static void test_euroc_bench_gt_begins_later(void **state)
 	    !strstr(r.err, "frame 0 (t = 1403636579.763556 s) comes before the ground truth"))
 		fail_msg("mvod bench (%d): %s", r.status, r.err);
 	harness_read_file(csv, text, sizeof(text));
-	/* The frames column (7th) of the one row: frames 3..19. */
+	/* The frames column (8th, after mode) of the one row: frames 3..19. */
 	const char *row = strchr(text, '\n') + 1;
-	for (int c = 0; c < 6; c++)
+	for (int c = 0; c < 7; c++)
 		row = strchr(row, ',') + 1;
 	assert_int_equal(atoi(row), FRAMES - 3);
 }
