@@ -14,10 +14,11 @@
 struct mvod_lcm_log;
 
 /*
- * The path of a file:// URL that LCM would write (mode=w) into path; 0 when it is one,
- * -ENOENT for any other URL (LCM's own), -ENAMETOOLONG.
+ * A file://PATH[?options] URL: PATH into path and LCM's mode option into *mode: 'r' (also
+ * when absent), 'w', 'a', or '?' for any other value. 0 when it is one; -ENOENT for any
+ * other URL (NULL too), -EINVAL for an empty PATH, -ENAMETOOLONG when PATH does not fit.
  */
-int mvod_lcm_log_url_path(const char *url, char *path, size_t len);
+int mvod_lcm_file_url(const char *url, char *path, size_t len, char *mode);
 /*
  * Opens path through the output policy (util/output.h: locked, truncated only at the first
  * event); what names it in messages. max_event: the largest channel name plus message, in
