@@ -833,6 +833,31 @@ static void test_unplug_and_return(void **state)
 	assert_int_equal(got.last.dropped_frames, sum.dropped);
 }
 
+/*
+ * Frames the camera sends broken (buffers cut short) are skipped and counted apart from the
+ * dropped ones, with FAULT_FRAME_UNREADABLE in status: processed + dropped + skipped = sent.
+ */
+static void test_bad_frames_not_dropped(void **state)
+{
+	(void)state;
+	reset(V4L2_PIX_FMT_GREY);
+	for (int i = 0; i < 8; i++)
+		add_frame(i, (uint32_t)i);
+	F.frames[2].len /= 2;
+	F.frames[5].len /= 2;
+	static volatile sig_atomic_t stop;
+	stop = 0;
+	F.done = &stop;
+	struct statuses got = {0};
+	struct mvod_run_summary sum;
+	run_fake(&stop, &got, &sum);
+	assert_int_equal(sum.skipped[MVOD_BAD_CORRUPT], 2);
+	assert_int_equal(sum.frames + sum.dropped + 2, 8);
+	assert_int_equal(got.last.frames, sum.frames);
+	assert_int_equal(got.last.dropped_frames, sum.dropped);
+	assert_true(got.last.faults & MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+}
+
 /* A stop that comes while the device is away ends the run (it would hang here otherwise). */
 static void test_stop_while_down(void **state)
 {
@@ -1034,6 +1059,7 @@ int main(void)
 		cmocka_unit_test(test_fewer_buffers),
 		cmocka_unit_test(test_sequence_gaps),
 		cmocka_unit_test(test_corrupt_mjpeg),
+		cmocka_unit_test(test_bad_frames_not_dropped),
 		cmocka_unit_test(test_lens_and_exposure),
 		cmocka_unit_test(test_list),
 		cmocka_unit_test(test_unplug_and_return),
