@@ -118,7 +118,7 @@ static void make_result(int i, struct mvod_vo_result *res, double q[4])
 	res->pose.t[1] = 2.0;
 	res->pose.t[2] = 3.0;
 	res->state = (enum mvod_track_state)(i % 6);
-	res->scale_source = (enum mvod_scale_source)(i % 5);
+	res->scale_source = (enum mvod_scale_source)(i % 8); /* all 8 of them */
 	res->status = (enum mvod_frame_status)(i % 7);
 	res->features = 1000 + i;
 	res->matches = 500 + i;
