@@ -225,6 +225,11 @@ int mvod_ipc_finish(struct mvod_ipc *ipc)
 	return ret;
 }
 
+int mvod_ipc_reopen_log(struct mvod_ipc *ipc, char *err, size_t errlen)
+{
+	return ipc && ipc->log ? mvod_lcm_log_reopen(ipc->log, err, errlen) : 0;
+}
+
 const char *mvod_ipc_log_path(const struct mvod_ipc *ipc)
 {
 	return ipc ? ipc->log_path : NULL;

@@ -89,6 +89,11 @@ int mvod_lcm_log_write(struct mvod_lcm_log *log, const char *channel, const void
 	return log->error;
 }
 
+int mvod_lcm_log_reopen(struct mvod_lcm_log *log, char *err, size_t errlen)
+{
+	return mvod_output_reopen(log->out, err, errlen);
+}
+
 int mvod_lcm_log_close(struct mvod_lcm_log *log)
 {
 	if (!log)
