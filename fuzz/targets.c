@@ -23,8 +23,9 @@
 #include "mvod/board.h"
 #include "mvod/calib.h"
 #include "mvod/config.h"
+#include "mvod/speed.h"
 #include "mvod/traj.h"
-#include "view/lcmlog.h"
+#include "ipc/log_check.h"
 #include "ipc/lcm_log.h"
 #include "util/output.h"
 
@@ -212,8 +213,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	ret = mvod_output_check("--out", out, target, sizeof(target), &kind, err, sizeof(err));
 	if (!ret)
 		check_target(kind, target);
-	int uret = mvod_lcm_log_url_path(s, upath, sizeof(upath));
-	assert(uret == 0 || uret == -ENOENT || uret == -ENAMETOOLONG);
+	char mode;
+	int uret = mvod_lcm_file_url(s, upath, sizeof(upath), &mode);
+	assert(uret == 0 || uret == -ENOENT || uret == -EINVAL || uret == -ENAMETOOLONG);
+	assert(uret || strchr("rwa?", mode));
 	assert(uret || (upath[0] && !strchr(upath, '?') && strncmp(s + 7, upath, strlen(upath)) == 0));
 	free(s);
 #elif defined(FUZZ_CONFIG)
@@ -267,6 +270,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		lcm_eventlog_destroy(log);
 		assert(n == c.events);
 	}
+	/* The same file as --speed-url: refused with a reason, or read to its end; no crash. */
+	char url[4200], verr[512];
+	snprintf(url, sizeof(url), "file://%s?mode=r", path);
+	struct mvod_speed *sp = NULL;
+	int sret = mvod_speed_create(url, MVOD_DEFAULT_SPEED_CHANNEL, &sp, err, sizeof(err));
+	assert(!sret == !mvod_lcmlog_vet(path, &c, verr, sizeof(verr)));
+	assert(!sret || err[0]);
+	double metres;
+	/* 2001-09-09 in microseconds: a frame time, far past any sample such logs hold. */
+	if (sp)
+		assert(mvod_speed_odometer(sp, 1000000000000000, &metres) <= 0);
+	mvod_speed_destroy(sp);
 #else
 #error "fuzz/targets.c: build with -DFUZZ_<NAME> of a target in fuzz/meson.build"
 #endif

@@ -682,9 +682,25 @@ static void restart_vo(struct run *r, const struct mvod_frame *f, int epoch)
 }
 
 /*
+ * The frames a live source could not decode before f and not yet counted: into the summary's
+ * skipped and the status's faults from this frame on (the capture thread logged them).
+ */
+static int64_t take_bad(struct run *r, const struct mvod_frame *f)
+{
+	int64_t n = 0;
+	for (int k = 0; k < MVOD_BAD_COUNT; k++) {
+		n += f->bad_before[k] - r->sum->skipped[k];
+		r->sum->skipped[k] = f->bad_before[k];
+	}
+	if (n)
+		mvod_faults_set(&r->faults, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
+	return n;
+}
+
+/*
  * Frames from a live source's capture thread, the newest each time. Frame numbers count every
  * frame the source produced, so a gap is exactly the frames dropped, by the driver or because
- * processing fell behind.
+ * processing fell behind, and those that could not be decoded.
  */
 static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 {
@@ -710,10 +726,7 @@ static int live_loop(struct run *r, volatile sig_atomic_t *stop)
 			restart_vo(r, &f, epoch);
 		if (r->o->clock == MVOD_CLOCK_REALTIME)
 			f.utime += mvod_realtime_offset_us();
-		/* Logged by the capture thread; status carries it from this frame on. */
-		if (mvod_capture_saw_unreadable(r->cap))
-			mvod_faults_set(&r->faults, MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
-		r->sum->dropped += f.index - r->last_index - 1;
+		r->sum->dropped += f.index - r->last_index - 1 - take_bad(r, &f);
 		r->last_index = f.index;
 		ret = process_frame(r, &f, (mvod_now_s() - t0) * 1e3);
 		if (ret)

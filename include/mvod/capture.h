@@ -39,6 +39,12 @@ struct mvod_frame {
 	int64_t delivered_us;
 	int64_t index;         /* 0-based frame number in the source */
 	enum mvod_bad_frame bad; /* why, when the read gave -EINVAL */
+	/*
+	 * From the capture thread of a live source: the frames before this one that could not
+	 * be decoded, since the start, by reason. They leave gaps in index but are no dropped
+	 * frames: they are counted apart (the summary's skipped, FAULT_FRAME_UNREADABLE).
+	 */
+	int64_t bad_before[MVOD_BAD_COUNT];
 };
 
 struct mvod_source_info {
@@ -144,15 +150,14 @@ int mvod_capture_start(struct mvod_source *src, const char *uri, struct mvod_cap
  * The next frame (live: the newest), waiting up to timeout_ms. 0 with the frame (valid until
  * the next call) and *epoch, the number of times the source has come back before it; -EINVAL
  * for one bad frame of a source that is not live (frame->index and frame->bad say which and
- * why; skip it); -EAGAIN when none came; once every frame was taken, -ENODATA when the source
+ * why; skip it; a live source's are counted in the next frame's bad_before); -EAGAIN when
+ * none came; once every frame was taken, -ENODATA when the source
  * ended or its -errno when it failed.
  */
 int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame *frame,
 		      int *epoch);
 /* The source is down and being reopened. */
 bool mvod_capture_down(struct mvod_capture *c);
-/* A frame could not be decoded and was skipped (the capture thread logged it, once). */
-bool mvod_capture_saw_unreadable(struct mvod_capture *c);
 /* Stops the thread promptly (even while reopening), closes the source, frees. NULL: no-op. */
 void mvod_capture_stop(struct mvod_capture *c);
 

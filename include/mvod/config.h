@@ -61,6 +61,8 @@ struct mvod_config_key {
 	 */
 	bool derived;
 	const char *const *choices; /* enums, NULL-terminated, in enum order */
+	/* strings: what a value must be beyond its length: 0, or -EINVAL with what it takes */
+	int (*check)(const char *text, char *err, size_t errlen);
 };
 
 extern const struct mvod_config_key mvod_config_keys[];

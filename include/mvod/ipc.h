@@ -50,6 +50,12 @@ int mvod_ipc_create_with(mvod_ipc_send_fn send, void *ctx, const char *pose_chan
  * when the first event is written); 0 for other URLs. Returns 0 or -errno, reason in err.
  */
 int mvod_ipc_open_log(struct mvod_ipc *ipc, char *err, size_t errlen);
+/*
+ * Log rotation (SIGHUP): when the file:// log's path no longer names the open file, opens a
+ * new one there, appending, and closes the old one after an fsync; 0 without a log. The log
+ * goes on in the file open before when this fails (-errno, reason in err).
+ */
+int mvod_ipc_reopen_log(struct mvod_ipc *ipc, char *err, size_t errlen);
 /* The file:// log's path, or NULL. */
 const char *mvod_ipc_log_path(const struct mvod_ipc *ipc);
 /*

@@ -105,8 +105,9 @@ struct mvod_run_summary {
 	bool calib_failed;
 	enum mvod_frontend frontend; /* the front end that ran: --frontend auto resolved */
 	bool live;       /* frames came through the capture thread */
-	int64_t dropped; /* frames a live source produced that were not processed */
-	/* frames of a dataset source skipped, by mvod_bad_frame reason (live: in dropped) */
+	/* frames a live source produced that were not processed, the skipped ones apart */
+	int64_t dropped;
+	/* frames skipped because they could not be decoded, by mvod_bad_frame reason */
 	int64_t skipped[MVOD_BAD_COUNT];
 	double wall_s, fps;
 	double stage_ms_mean[MVOD_STAGE_COUNT];

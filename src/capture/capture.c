@@ -35,7 +35,8 @@ struct mvod_capture {
 	int backoff_ms;
 	int64_t base;                 /* added to the source's indices: a reopened one starts at 0 */
 	int64_t last;                 /* index of the last frame posted */
-	atomic_bool saw_bad; /* a frame could not be decoded (logged once, here) */
+	/* Live: frames that could not be decoded, by reason (the capture thread's alone). */
+	int64_t bad[MVOD_BAD_COUNT];
 };
 
 static bool stopping(struct mvod_capture *c)
@@ -86,6 +87,7 @@ static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct 
 	l->frame.utime = f->utime;
 	l->frame.delivered_us = f->delivered_us;
 	l->frame.index = c->base + f->index;
+	memcpy(l->frame.bad_before, c->bad, sizeof(c->bad));
 	l->epoch = c->epoch;
 	l->read = 0;
 	c->last = l->frame.index;
@@ -93,9 +95,10 @@ static void deliver(struct mvod_capture *c, struct mvod_letter *l, const struct 
 }
 
 /*
- * A frame that could not be decoded at its size: a live source's is logged once and counted
- * as dropped; any other source's goes through the queue in its place, for the consumer to
- * skip and count by its reason.
+ * A frame that could not be decoded at its size: a live source's is logged once per reason
+ * and counted, the count going out with the next frame (bad_before: a frame the mailbox
+ * replaces loses no count); any other source's goes through the queue in its place, for the
+ * consumer to skip and count by its reason.
  */
 static void bad_frame(struct mvod_capture *c, struct mvod_letter *l, const struct mvod_frame *f)
 {
@@ -106,9 +109,10 @@ static void bad_frame(struct mvod_capture *c, struct mvod_letter *l, const struc
 		post(c);
 		return;
 	}
-	if (!atomic_exchange(&c->saw_bad, true))
-		LOG(WARN, "%s: skipping frames that cannot be decoded at their size (counted as "
-			  "dropped)", c->uri);
+	enum mvod_bad_frame why = f->bad < MVOD_BAD_COUNT ? f->bad : MVOD_BAD_CORRUPT;
+	if (c->bad[why]++ == 0)
+		LOG(WARN, "%s: frame %lld is %s: skipped; later ones are only counted, in the "
+			  "summary", c->uri, (long long)(c->base + f->index), mvod_bad_frame_name(why));
 }
 
 static void lose(struct mvod_capture *c)
@@ -243,11 +247,6 @@ int mvod_capture_next(struct mvod_capture *c, int timeout_ms, struct mvod_frame 
 bool mvod_capture_down(struct mvod_capture *c)
 {
 	return atomic_load(&c->down);
-}
-
-bool mvod_capture_saw_unreadable(struct mvod_capture *c)
-{
-	return atomic_load(&c->saw_bad);
 }
 
 void mvod_capture_stop(struct mvod_capture *c)

@@ -13,33 +13,6 @@
 
 static_assert(offsetof(struct mvod_dataset, images) == 0, "the images ops take the dataset priv");
 
-int mvod_ds_read_lines(const char *path, mvod_ds_line_fn fn, void *ctx, char *err,
-		       size_t errlen)
-{
-	/* An index file is an input: no output of this process may be it (util/output.h). */
-	int noted = mvod_input_note(path);
-	if (noted < 0)
-		return mvod_errf(err, errlen, noted, "%s: %s", path, strerror(-noted));
-	FILE *f = fopen(path, "re");
-	if (!f)
-		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
-	char *line = NULL;
-	size_t cap = 0, lineno = 0;
-	int ret = 0;
-	while (!ret && getline(&line, &cap, f) >= 0) {
-		lineno++;
-		line[strcspn(line, "\r\n")] = '\0';
-		const char *s = line + strspn(line, " \t");
-		if (*s && *s != '#')
-			ret = fn(ctx, line, lineno, err, errlen);
-	}
-	if (!ret && ferror(f))
-		ret = mvod_errf(err, errlen, -EIO, "cannot read %s: %s", path, strerror(EIO));
-	free(line);
-	fclose(f);
-	return ret;
-}
-
 /*
  * Decimal digits at s, at most max of them, into *v; how many were read, or -1 when more
  * follow or the value would pass INT64_MAX.

@@ -32,16 +32,6 @@ struct mvod_dataset {
 	struct mvod_pose body_cam; /* T_BS: camera to ground-truth body frame (identity for TUM) */
 };
 
-/* Calls fn on each line (line end cut off); *ctx is the caller's. Returns fn's first error. */
-typedef int (*mvod_ds_line_fn)(void *ctx, char *line, size_t lineno, char *err, size_t errlen);
-
-/*
- * Reads path line by line, skipping blank lines and '#' comments, and hands the rest to fn
- * with their 1-based line numbers. -errno with a reason naming path in err.
- */
-int mvod_ds_read_lines(const char *path, mvod_ds_line_fn fn, void *ctx, char *err,
-		       size_t errlen);
-
 /*
  * A timestamp at s, exactly, into nanoseconds: integer nanoseconds (EuRoC) or decimal
  * seconds with up to 9 digits after the point (TUM; further digits are below a nanosecond

@@ -16,6 +16,7 @@
 
 #include "mvod/log.h"
 #include "util/output.h"
+#include "util/read_file.h"
 
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
@@ -154,12 +155,9 @@ out:
 	return ret;
 }
 
-/* Seconds from the first token of line, as microseconds; -ENODATA for a blank line. */
+/* Seconds from the first token of line, as microseconds; -EINVAL when it is none. */
 static int parse_seconds(const char *line, int64_t *us)
 {
-	line += strspn(line, " \t\r\n");
-	if (*line == '\0')
-		return -ENODATA;
 	char *end;
 	double s = strtod(line, &end);
 	/* 9e12 s is where int64 microseconds run out; the test also rejects nan. */
@@ -169,62 +167,41 @@ static int parse_seconds(const char *line, int64_t *us)
 	return 0;
 }
 
-/* One time per non-blank line into t[0..n), blank lines skipped. */
-static int parse_times(FILE *f, const char *path, int64_t *t, size_t n, char *err, size_t errlen)
+/* times.txt as it is read: one time per image, into t[0..n), k of them so far. */
+struct times {
+	const char *path;
+	int64_t *t;
+	size_t n, k;
+};
+
+/* One line's time: 1 once the n-th is in (the rest of the file is not read). */
+static int time_line(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
 {
-	char *line = NULL;
-	size_t cap = 0, k = 0, lineno = 0;
-	int ret = 0;
-	while (k < n && getline(&line, &cap, f) >= 0) {
-		lineno++;
-		ret = parse_seconds(line, &t[k]);
-		if (ret == -ENODATA)
-			continue;
-		if (ret < 0) {
-			line[strcspn(line, "\r\n")] = '\0';
-			ret = mvod_errf(err, errlen, -EINVAL,
-						"%s line %zu: \"%.40s\" is not a time in seconds",
-						path, lineno, line);
-			goto out;
-		}
-		if (k > 0 && t[k] <= t[k - 1]) {
-			ret = mvod_errf(err, errlen, -EINVAL,
-					"%s line %zu: %.6f s is not after the line before (%.6f s): "
-					"times must increase, one line per image in name order",
-					path, lineno, t[k] / 1e6, t[k - 1] / 1e6);
-			goto out;
-		}
-		k++;
-	}
-	ret = 0;
-	if (k < n)
-		ret = mvod_errf(err, errlen, -EINVAL,
-					"%s has %zu timestamps for %zu images; it needs one line "
-					"per image", path, k, n);
-out:
-	free(line);
-	return ret;
+	struct times *x = ctx;
+	int64_t *t = x->t;
+	if (parse_seconds(line, &t[x->k]) < 0)
+		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not a time in "
+				 "seconds", x->path, lineno, line);
+	if (x->k > 0 && t[x->k] <= t[x->k - 1])
+		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: %.6f s is not after the line "
+				 "before (%.6f s): times must increase, one line per image in name "
+				 "order", x->path, lineno, t[x->k] / 1e6, t[x->k - 1] / 1e6);
+	return ++x->k == x->n;
 }
 
-/* The n times of path, or -ENOENT (err untouched) when the file does not exist. */
+/* The n times of path, or -ENOENT when the file does not exist. */
 static int load_times(struct mvod_images *im, const char *path, char *err, size_t errlen)
 {
-	FILE *f = fopen(path, "re");
-	if (!f) {
-		if (errno == ENOENT)
-			return -ENOENT;
-		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path,
-					 strerror(errno));
-	}
-	int ret = 0;
+	if (access(path, F_OK) != 0 && errno == ENOENT)
+		return -ENOENT;
 	im->times_us = malloc(im->n * sizeof(*im->times_us));
-	if (!im->times_us) {
-		ret = mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", path);
-		goto out;
-	}
-	ret = parse_times(f, path, im->times_us, im->n, err, errlen);
-out:
-	fclose(f);
+	if (!im->times_us)
+		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", path);
+	struct times x = {path, im->times_us, im->n, 0};
+	int ret = mvod_read_lines(path, time_line, &x, err, errlen);
+	if (!ret && x.k < x.n)
+		ret = mvod_errf(err, errlen, -EINVAL, "%s has %zu timestamps for %zu images; it "
+				"needs one line per image", path, x.k, x.n);
 	return ret;
 }
 

@@ -93,6 +93,7 @@ static int lcam_read(void *priv, struct mvod_frame *frame, const struct mvod_ima
 	frame->index = mvod_seq_next(&s->seq, f.sequence);
 	frame->utime = f.utime;
 	frame->img = into ? *into : s->grey;
+	frame->bad = MVOD_BAD_CORRUPT; /* what -EINVAL means here: flagged, or not decoded */
 	ret = f.bad || mvod_camfmt_to_grey(s->mode.fmt, f.data, f.len, s->mode.stride, s->mjpeg,
 					   &frame->img) < 0 ? -EINVAL : 0;
 	int rret = mvod_lcam_release(s->cam);

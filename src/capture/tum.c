@@ -98,7 +98,7 @@ static int open_rgbd(struct tum *t, char *err, size_t errlen)
 	int ret = mvod_ds_optional(ds->gt_path, sizeof(ds->gt_path), t->dir, "groundtruth.txt",
 				   err, errlen);
 	if (!ret)
-		ret = mvod_ds_read_lines(ds->index, add_rgb, &x, err, errlen);
+		ret = mvod_read_lines(ds->index, add_rgb, &x, err, errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;
@@ -198,7 +198,7 @@ static int open_mono(struct tum *t, char *err, size_t errlen)
 	char path[PATH_MAX], *text = NULL;
 	int ret = mvod_capture_path(path, sizeof(path), t->dir, "camera.txt", err, errlen);
 	if (!ret)
-		ret = mvod_ds_read_lines(ds->index, add_mono, &x, err, errlen);
+		ret = mvod_read_lines(ds->index, add_mono, &x, err, errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;

@@ -411,6 +411,7 @@ static int take_frame(struct v4l2_source *v, const struct v4l2_buffer *b,
 	size_t used = b->bytesused && b->bytesused <= m->len ? b->bytesused : m->len;
 	f->img = into ? *into : v->grey;
 	/* A frame the driver flags as corrupt, or one that does not convert, is lost alone. */
+	f->bad = MVOD_BAD_CORRUPT;
 	if ((b->flags & V4L2_BUF_FLAG_ERROR) ||
 	    mvod_camfmt_to_grey(v->fmt, m->start, used, v->stride, v->mjpeg, &f->img) < 0)
 		return -EINVAL;

@@ -197,7 +197,7 @@ int cli_check_frontend(const struct mvod_config *cfg)
 
 int cli_parse_key(int k, const char *arg, struct mvod_config *cfg)
 {
-	char want[128];
+	char want[256];
 	if (mvod_config_set(cfg, k, arg, want, sizeof(want)) == 0)
 		return 0;
 	return cli_bad_value(mvod_config_keys[k].flag, arg, want);

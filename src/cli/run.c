@@ -94,7 +94,7 @@ static void usage(FILE *out)
 "                        exit\n"
 "\n"
 "Signals: SIGTERM or SIGINT stop cleanly (a second one at once); SIGHUP reopens the\n"
-"trajectory file by name (log rotation).\n"
+"trajectory file and a file:// LCM log by name (log rotation).\n"
 "\n"
 "Cameras:\n"
 "  --list-cameras        list the V4L2 and libcamera cameras attached, their formats, sizes\n"

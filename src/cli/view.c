@@ -5,7 +5,6 @@
 #include "cli/cli.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,7 +17,8 @@
 #include "mvod/ipc.h"
 #include "mvod/log.h"
 #include "mvod/view.h"
-#include "view/lcmlog.h"
+#include "ipc/lcm_log.h"
+#include "ipc/log_check.h"
 #include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
 #include "mvod_status2_t.h"
@@ -112,24 +112,11 @@ static int parse_own(int id, const char *arg, void *ctx)
 	return -ENOENT;
 }
 
-/* Whether an LCM file URL opens its log for writing, which would truncate it. */
-static bool url_writes_log(const char *url)
-{
-	const char *q = strncmp(url, "file://", 7) == 0 ? strchr(url, '?') : NULL;
-	for (const char *p = q; p; p = strchr(p + 1, '&'))
-		if (strncmp(p + 1, "mode=", 5) == 0 && p[6] != 'r')
-			return true;
-	return false;
-}
-
 /* A file:// log is what the view reads: --png may not be it (util/output.h). */
 static int note_log(const char *url)
 {
-	char path[4096];
-	if (!url || strncmp(url, "file://", 7) != 0)
-		return 0;
-	snprintf(path, sizeof(path), "%.*s", (int)strcspn(url + 7, "?"), url + 7);
-	return mvod_input_note(path);
+	char path[4096], mode;
+	return mvod_lcm_file_url(url, path, sizeof(path), &mode) ? 0 : mvod_input_note(path);
 }
 
 static bool have_display(void)
@@ -149,7 +136,8 @@ static int parse_cli(int argc, char **argv, struct cli *c)
 		fprintf(stderr, "%s: --every needs --png FILE\n", cli_prog);
 		return -EINVAL;
 	}
-	if (c->url && url_writes_log(c->url)) {
+	char path[4096], mode = 'r';
+	if (c->url && !mvod_lcm_file_url(c->url, path, sizeof(path), &mode) && mode != 'r') {
 		fprintf(stderr, "%s: --lcm-url %s: the viewer only reads logs; use mode=r (writing "
 				"would truncate the log)\n", cli_prog, c->url);
 		return -EINVAL;
@@ -321,45 +309,28 @@ static int open_lcm(struct viewer *w)
 }
 
 /*
- * A log is checked before LCM reads it (view/lcmlog.h): corrupt, it is refused with the place;
- * only cut short at its end (a writer stopped mid-event), LCM reads it up to there, safely.
- * A log that cannot be read, or holds no event, is refused too: LCM would only say "check
- * --lcm-url".
+ * A log is checked before LCM reads it (ipc/log_check.h): corrupt, empty or unreadable, it is
+ * refused (LCM would only say "check --lcm-url"); only cut short at its end (a writer stopped
+ * mid-event), LCM reads it up to there, safely.
  */
 static int check_log(struct viewer *w)
 {
-	const char *path = w->url + strlen("file://");
-	char buf[4096];
-	snprintf(buf, sizeof(buf), "%.*s", (int)strcspn(path, "?"), path);
-	int fd = open(buf, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-	if (fd < 0) {
-		LOG(ERROR, "cannot read log %s: %s", buf, strerror(errno));
-		return -errno;
-	}
+	char path[4096], mode, err[512];
 	struct mvod_lcmlog_check c;
-	int ret = mvod_lcmlog_check(fd, &c);
-	close(fd);
+	int ret = mvod_lcm_file_url(w->url, path, sizeof(path), &mode);
+	if (!ret)
+		ret = mvod_lcmlog_vet(path, &c, err, sizeof(err));
+	else
+		snprintf(err, sizeof(err), "%s: %s", w->url, strerror(-ret));
 	if (ret) {
-		LOG(ERROR, "cannot read log %s: %s", buf, strerror(-ret));
+		LOG(ERROR, "%s%s", err, ret == -ENODATA ? ": nothing to show" : "");
 		return ret;
 	}
 	w->cut_at = c.cut ? c.bad_offset : -1;
-	if (c.events == 0 && (c.bad_offset < 0 || c.cut)) {
-		LOG(ERROR, "log %s holds no whole event (%lld bytes): nothing to show", buf,
-		    (long long)c.size);
-		return -ENODATA;
-	}
-	if (c.bad_offset < 0)
-		return 0;
-	if (c.cut) {
+	if (c.cut)
 		LOG(WARN, "log %s is cut short at byte %lld: %s; the %lld whole events before it "
-			  "are shown", buf, (long long)c.bad_offset, c.why, (long long)c.events);
-		return 0;
-	}
-	LOG(ERROR, "log %s is corrupt at byte %lld of %lld: %s; the %lld events before it are "
-		   "intact (truncate -s %lld keeps only them)", buf, (long long)c.bad_offset,
-	    (long long)c.size, c.why, (long long)c.events, (long long)c.bad_offset);
-	return -EIO;
+			  "are shown", path, (long long)c.bad_offset, c.why, (long long)c.events);
+	return 0;
 }
 
 static void close_lcm(struct viewer *w)

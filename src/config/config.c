@@ -9,6 +9,7 @@
 #include <ini.h>
 #include <lcm/lcm.h>
 
+#include "util/body_frame.h"
 #include "util/errbuf.h"
 #include "util/read_file.h"
 
@@ -80,7 +81,7 @@ const struct mvod_config_key mvod_config_keys[] = {
 	{KEY("output", "frame", "frame", MVOD_CONFIG_ENUM, run.axes), .choices = mvod_axes_names,
 	 .run_only = true},
 	{KEY("output", "camera-to-body", "camera-to-body", MVOD_CONFIG_STRING, run.camera_to_body),
-	 .optional = true, .run_only = true},
+	 .optional = true, .run_only = true, .check = mvod_body_frame_check},
 	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names),
 	{KEY("log", "quiet", "quiet", MVOD_CONFIG_BOOL, quiet), .short_flag = 'q',
 	 .flag_value = true},
@@ -198,6 +199,8 @@ static int set_value(struct mvod_config *c, int ki, const char *text, char *err,
 		if (k->hi > 0 && strlen(text) > k->hi)
 			return mvod_errf(err, errlen, -EINVAL, "at most %.0f characters (LCM's limit "
 					 "for a channel name, less the 2 of its v2 channel), not %zu", k->hi, strlen(text));
+		if (*text && k->check && k->check(text, err, errlen))
+			return -EINVAL;
 		drop_string(c, ki);
 		*(const char **)dst = *text ? text : NULL;
 		return 0;
@@ -301,7 +304,7 @@ static int on_key(void *user, const char *section, const char *key, const char *
 		parse_error(ps, "[%s] %s: out of memory", section, key);
 		return 0;
 	}
-	char want[128];
+	char want[256];
 	if (mvod_config_set(ps->c, k, copy ? copy : value, want, sizeof(want))) {
 		free(copy);
 		parse_error(ps, "[%s] %s = %s: expected %s", section, key, value, want);

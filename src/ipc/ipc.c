@@ -175,14 +175,16 @@ int mvod_ipc_create(const char *url, const char *pose_channel, const char *statu
 		    struct mvod_ipc **out)
 {
 	struct mvod_ipc *ipc = NULL;
-	char path[4096];
+	char path[4096], mode;
 	if (!out)
 		return -EINVAL;
 	/* LCM_DEFAULT_URL too: a file:// log named there is written by mvod as well. */
 	const char *u = url ? url : getenv("LCM_DEFAULT_URL");
-	int ret = mvod_lcm_log_url_path(u, path, sizeof(path));
-	if (ret != -ENOENT)
-		return ret ? ret : create_log(u, path, pose_channel, status_channel, out);
+	int ret = mvod_lcm_file_url(u, path, sizeof(path), &mode);
+	if (ret != -ENOENT && ret != 0)
+		return ret;
+	if (ret == 0 && mode == 'w')
+		return create_log(u, path, pose_channel, status_channel, out);
 	/* A NULL url makes lcm_create consult LCM_DEFAULT_URL, then fall back to its default. */
 	lcm_t *lcm = lcm_create(url);
 	if (!lcm)
@@ -221,6 +223,11 @@ int mvod_ipc_finish(struct mvod_ipc *ipc)
 	int ret = mvod_lcm_log_close(ipc->log);
 	ipc->log = NULL;
 	return ret;
+}
+
+int mvod_ipc_reopen_log(struct mvod_ipc *ipc, char *err, size_t errlen)
+{
+	return ipc && ipc->log ? mvod_lcm_log_reopen(ipc->log, err, errlen) : 0;
 }
 
 const char *mvod_ipc_log_path(const struct mvod_ipc *ipc)

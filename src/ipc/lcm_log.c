@@ -19,20 +19,23 @@ struct mvod_lcm_log {
 	uint8_t buf[];
 };
 
-int mvod_lcm_log_url_path(const char *url, char *path, size_t len)
+int mvod_lcm_file_url(const char *url, char *path, size_t len, char *mode)
 {
 	static const char scheme[] = "file://";
 	if (!url || strncmp(url, scheme, sizeof(scheme) - 1) != 0)
 		return -ENOENT;
-	const char *p = url + sizeof(scheme) - 1, *q = strchr(p, '?');
-	/* LCM's mode option: "mode=w" among &-separated options; r (its default) is playback. */
-	bool write = false;
-	for (const char *o = q; o && !write; o = strchr(o + 1, '&'))
-		write = strncmp(o + 1, "mode=w", 6) == 0 && (o[7] == '\0' || o[7] == '&');
-	if (!write)
-		return -ENOENT;
-	int plen = (int)(q - p);
-	return plen > 0 && (size_t)snprintf(path, len, "%.*s", plen, p) < len ? 0 : -ENAMETOOLONG;
+	const char *p = url + sizeof(scheme) - 1;
+	size_t plen = strcspn(p, "?");
+	/* LCM's mode option among &-separated options: r (its default), w or a. */
+	*mode = 'r';
+	for (const char *o = p[plen] ? p + plen : NULL; o; o = strchr(o + 1, '&'))
+		if (strncmp(o + 1, "mode=", 5) == 0) {
+			bool one = o[6] && (o[7] == '\0' || o[7] == '&');
+			*mode = one && strchr("rwa", o[6]) ? o[6] : '?';
+		}
+	if (plen == 0)
+		return -EINVAL;
+	return (size_t)snprintf(path, len, "%.*s", (int)plen, p) < len ? 0 : -ENAMETOOLONG;
 }
 
 int mvod_lcm_log_open(const char *what, const char *path, size_t max_event,
@@ -84,6 +87,11 @@ int mvod_lcm_log_write(struct mvod_lcm_log *log, const char *channel, const void
 	log->error = mvod_output_write(log->out, log->buf, MVOD_LCM_LOG_HEADER + clen + len);
 	log->next_event += !log->error;
 	return log->error;
+}
+
+int mvod_lcm_log_reopen(struct mvod_lcm_log *log, char *err, size_t errlen)
+{
+	return mvod_output_reopen(log->out, err, errlen);
 }
 
 int mvod_lcm_log_close(struct mvod_lcm_log *log)

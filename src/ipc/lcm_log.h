@@ -14,10 +14,11 @@
 struct mvod_lcm_log;
 
 /*
- * The path of a file:// URL that LCM would write (mode=w) into path; 0 when it is one,
- * -ENOENT for any other URL (LCM's own), -ENAMETOOLONG.
+ * A file://PATH[?options] URL: PATH into path and LCM's mode option into *mode: 'r' (also
+ * when absent), 'w', 'a', or '?' for any other value. 0 when it is one; -ENOENT for any
+ * other URL (NULL too), -EINVAL for an empty PATH, -ENAMETOOLONG when PATH does not fit.
  */
-int mvod_lcm_log_url_path(const char *url, char *path, size_t len);
+int mvod_lcm_file_url(const char *url, char *path, size_t len, char *mode);
 /*
  * Opens path through the output policy (util/output.h: locked, truncated only at the first
  * event); what names it in messages. max_event: the largest channel name plus message, in
@@ -32,6 +33,8 @@ int mvod_lcm_log_open(const char *what, const char *path, size_t max_event,
  * failure nothing more is written and every call returns that error. No allocation.
  */
 int mvod_lcm_log_write(struct mvod_lcm_log *log, const char *channel, const void *data, size_t len);
+/* Log rotation: mvod_output_reopen (util/output.h) of the file; 0 or -errno, why in err. */
+int mvod_lcm_log_reopen(struct mvod_lcm_log *log, char *err, size_t errlen);
 /* fsyncs and closes; the first error of any write or of this. NULL: 0. */
 int mvod_lcm_log_close(struct mvod_lcm_log *log);
 

@@ -10,6 +10,7 @@
 #include <lcm/lcm.h>
 
 #include "ipc/lcm_log.h"
+#include "ipc/log_check.h"
 #include "mvod_speed_t.h"
 #include "util/errbuf.h"
 
@@ -73,30 +74,34 @@ static void on_message(const lcm_recv_buf_t *rbuf, const char *channel, void *ct
 	take(ctx, rbuf->data, rbuf->data_size);
 }
 
-/* file://PATH[?options] -> PATH; false for other URLs. */
-static bool file_url_path(const char *url, char *path, size_t len)
+/*
+ * A log is checked before LCM reads it (ipc/log_check.h): LCM's reader crashes on a garbage
+ * event length. One cut short at its end is read up to there.
+ */
+static int open_log(struct mvod_speed *s, const char *url, const char *path, char mode,
+		    char *err, size_t errlen)
 {
-	if (strncmp(url, "file://", 7) != 0)
-		return false;
-	size_t n = strcspn(url + 7, "?");
-	if (n >= len)
-		return false;
-	memcpy(path, url + 7, n);
-	path[n] = '\0';
-	return true;
+	if (mode != 'r')
+		return mvod_errf(err, errlen, -EINVAL, "%s is a log to write (mode=%c): read the "
+				 "speed from file://%s?mode=r", url, mode, path);
+	struct mvod_lcmlog_check c;
+	int ret = mvod_lcmlog_vet(path, &c, err, errlen);
+	if (ret)
+		return ret;
+	s->log = lcm_eventlog_create(path, "r");
+	return s->log ? 0 : mvod_errf(err, errlen, errno ? -errno : -EIO, "cannot read the LCM "
+				      "log %s: %s", path, strerror(errno));
 }
 
 static int open_source(struct mvod_speed *s, const char *url, char *err, size_t errlen)
 {
-	char path[4096];
-	if (mvod_lcm_log_url_path(url, path, sizeof(path)) == 0)
-		return mvod_errf(err, errlen, -EINVAL, "%s is a log to write (mode=w): read the "
-				 "speed from file://%s?mode=r", url, path);
-	if (file_url_path(url, path, sizeof(path))) {
-		s->log = lcm_eventlog_create(path, "r");
-		return s->log ? 0 : mvod_errf(err, errlen, errno ? -errno : -EIO, "cannot read "
-					      "the LCM log %s: %s", path, strerror(errno));
-	}
+	char path[4096], mode;
+	int ret = mvod_lcm_file_url(url, path, sizeof(path), &mode);
+	if (ret == 0)
+		return open_log(s, url, path, mode, err, errlen);
+	if (ret != -ENOENT)
+		return mvod_errf(err, errlen, ret, "%s is no log to read (file:///PATH?mode=r): %s",
+				 url, strerror(-ret));
 	s->lcm = lcm_create(*url ? url : NULL);
 	if (!s->lcm)
 		return mvod_errf(err, errlen, -EINVAL, "cannot open LCM at %s", *url ? url

@@ -1,4 +1,7 @@
-/* The LCM sink: every frame's mvod.pose_t, and each status report as mvod.status_t. */
+/*
+ * The LCM sink: every frame's mvod.pose_t, and each status report as mvod.status_t; a file://
+ * log reopened by name on SIGHUP.
+ */
 #include "mvod/sink.h"
 
 #include <errno.h>
@@ -36,6 +39,19 @@ static void lcm_status(void *ctx, const struct mvod_status *st, bool news)
 			   "it); mvod carries on, and says no more of it");
 }
 
+/* Log rotation: a file:// log goes on in a new file under its name, as the trajectory does. */
+static void lcm_between(void *ctx, bool reopen)
+{
+	struct lcm_sink *s = ctx;
+	if (!reopen || !mvod_ipc_log_path(s->ipc))
+		return;
+	char err[512] = "";
+	if (mvod_ipc_reopen_log(s->ipc, err, sizeof(err)))
+		LOG(ERROR, "cannot reopen LCM log: %s; still writing to the file open before", err);
+	else
+		LOG(INFO, "reopened LCM log %s", mvod_ipc_log_path(s->ipc));
+}
+
 /* An incomplete file:// LCM log is a failed run, as an incomplete trajectory is. */
 static int lcm_finish(void *ctx, struct mvod_run_summary *summary)
 {
@@ -50,6 +66,7 @@ static const struct mvod_sink_ops lcm_ops = {
 	.name = "lcm",
 	.frame = lcm_frame,
 	.status = lcm_status,
+	.between = lcm_between,
 	.finish = lcm_finish,
 	.destroy = free,
 };

@@ -10,6 +10,7 @@
 
 #include "util/errbuf.h"
 #include "util/output.h"
+#include "util/read_file.h"
 
 const char *const mvod_traj_format_names[] = {"tum", "kitti", NULL};
 
@@ -183,57 +184,47 @@ static int bad_line(const char *path, int lineno, int cols, int n, char *err, si
 			 lineno, want, layout, found);
 }
 
+/* What mvod_traj_load gathers, line by line. */
+struct loader {
+	const char *path;
+	struct mvod_traj tr;
+	int cap, cols;
+};
+
+static int load_line(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
+{
+	struct loader *l = ctx;
+	double v[12];
+	int n = parse_numbers(line, v, 12);
+	if (n == 0)
+		return 0;
+	if (l->cols == 0 && (n == 8 || n == 12)) {
+		l->cols = n;
+		l->tr.format = n == 8 ? MVOD_TRAJ_TUM : MVOD_TRAJ_KITTI;
+	}
+	if (n != l->cols)
+		return bad_line(l->path, (int)lineno, l->cols, n, err, errlen);
+	int ret = l->cols == 8 ? check_quaternion(l->path, (int)lineno, v, err, errlen) : 0;
+	if (ret)
+		return ret;
+	double t;
+	struct mvod_pose p;
+	pose_from_numbers(l->tr.format, v, &t, &p);
+	return traj_push(&l->tr, &l->cap, t, &p);
+}
+
 int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen)
 {
-	struct mvod_traj tr = {0};
-	int cap = 0, ret = 0, lineno = 0, cols = 0;
-	char *line = NULL;
-	size_t linecap = 0;
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return mvod_errf(err, errlen, -errno, "cannot open %s: %s", path, strerror(errno));
-	/* Ground truth is an input: no output of this run may be it. */
-	ret = mvod_input_note(path);
-	if (ret) {
-		mvod_errf(err, errlen, ret, "%s: out of memory", path);
-		goto out;
-	}
-	while (getline(&line, &linecap, f) > 0) {
-		double v[12];
-		lineno++;
-		int n = parse_numbers(line, v, 12);
-		if (n == 0)
-			continue;
-		if (cols == 0 && (n == 8 || n == 12)) {
-			cols = n;
-			tr.format = n == 8 ? MVOD_TRAJ_TUM : MVOD_TRAJ_KITTI;
-		}
-		if (n != cols) {
-			ret = bad_line(path, lineno, cols, n, err, errlen);
-			goto out;
-		}
-		if (cols == 8 && (ret = check_quaternion(path, lineno, v, err, errlen)))
-			goto out;
-		double t;
-		struct mvod_pose p;
-		pose_from_numbers(tr.format, v, &t, &p);
-		ret = traj_push(&tr, &cap, t, &p);
-		if (ret)
-			goto out;
-	}
-	/* getline ends on errors too (a directory: EISDIR), which are no empty file. */
-	if (ferror(f))
-		ret = mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
-	else if (tr.n == 0)
+	/* Ground truth is an input: mvod_read_lines notes it, so no output of this run may be it. */
+	struct loader l = {.path = path};
+	int ret = mvod_read_lines(path, load_line, &l, err, errlen);
+	if (!ret && l.tr.n == 0)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s: no poses (an empty file, or only comments)",
 				path);
-out:
-	free(line);
-	fclose(f);
 	if (ret)
-		mvod_traj_free(&tr);
+		mvod_traj_free(&l.tr);
 	else
-		*out = tr;
+		*out = l.tr;
 	return ret;
 }
 

@@ -27,6 +27,12 @@ int mvod_body_frame_init(enum mvod_axes axes, const char *camera_to_body,
 			 struct mvod_body_frame *bf, char *err, size_t errlen);
 
 /*
+ * Whether camera_to_body is an extrinsic mvod_body_frame_init takes (for the configuration, so
+ * that a bad value is a usage error): 0, or -EINVAL with what it takes in err.
+ */
+int mvod_body_frame_check(const char *camera_to_body, char *err, size_t errlen);
+
+/*
  * out = the pose to publish for camera-to-world cam: T_bc cam T_cb, the extrinsic's
  * translation in output units (metres / unit_m; unit_m = metres per unit, 1 when unknown).
  * out may alias cam.

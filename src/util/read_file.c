@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -90,4 +91,32 @@ int mvod_read_file(const char *path, size_t max, const char *what, char **out, s
 	if (len)
 		*len = n;
 	return 0;
+}
+
+int mvod_read_lines(const char *path, mvod_line_fn fn, void *ctx, char *err, size_t errlen)
+{
+	/* An input: no output of this process may be it (util/output.h). */
+	int ret = mvod_input_note(path);
+	if (ret < 0)
+		return mvod_errf(err, errlen, ret, "%s: %s", path, strerror(-ret));
+	FILE *f = fopen(path, "re");
+	if (!f)
+		return mvod_errf(err, errlen, -errno, "cannot read %s: %s", path, strerror(errno));
+	char *line = NULL;
+	size_t cap = 0, lineno = 0;
+	while (!ret && getline(&line, &cap, f) >= 0) {
+		lineno++;
+		line[strcspn(line, "\r\n")] = '\0';
+		const char *s = line + strspn(line, " \t");
+		if (*s && *s != '#')
+			ret = fn(ctx, line, lineno, err, errlen);
+	}
+	/* getline ends on errors too (a directory: EISDIR), which are no end of the file. */
+	int read_errno = ferror(f) ? (errno ? errno : EIO) : 0;
+	if (!ret && read_errno)
+		ret = mvod_errf(err, errlen, -read_errno, "cannot read %s: %s", path,
+				strerror(read_errno));
+	free(line);
+	fclose(f);
+	return ret < 0 ? ret : 0;
 }

@@ -2,7 +2,8 @@
  * mvod as a daemon, through the real binary: the config file (a good one runs, flags override
  * it, a bad one is exit 2 naming file:line and key, --print-config round-trips), systemd's
  * notifications over a NOTIFY_SOCKET of our own (READY=1, STATUS=, WATCHDOG=1, STOPPING=1), and
- * signals: SIGHUP reopens the trajectory by name, SIGTERM stops cleanly, a second one at once.
+ * signals: SIGHUP reopens the trajectory and the file:// LCM log by name, SIGTERM stops cleanly,
+ * a second one at once.
  *
  * The live runs play a clip rendered at 20 fps with ?realtime=1, so they last the clip's 4 s
  * whatever the machine's speed, long enough to signal them mid-run.
@@ -305,17 +306,29 @@ static int summary_frames(const char *out)
 	return n;
 }
 
+/* The poses of a log, at least 3, each frame after the one before. */
+static int log_poses(const char *log, mvod_pose_t *p, int max)
+{
+	int n = harness_poses(log, p, max);
+	assert_true(n >= 3 && n < max);
+	for (int i = 1; i < n; i++)
+		assert_true(p[i].frame > p[i - 1].frame);
+	return n;
+}
+
 static void test_sighup_reopens_trajectory(void **state)
 {
 	(void)state;
-	char traj[300], rotated[300], log[300], out[300];
+	char traj[300], rotated[300], log[300], log_rotated[300], out[300];
 	tmp_path(traj, sizeof(traj), "hup.tum");
 	tmp_path(rotated, sizeof(rotated), "hup.tum.1");
+	tmp_path(log_rotated, sizeof(log_rotated), "hup.lcmlog.1");
 	pid_t pid = start_live(traj, tmp_path(log, sizeof(log), "hup.lcmlog"),
 			       tmp_path(out, sizeof(out), "hup.out"), NULL);
 	harness_wait_lines(traj, 3, pid);
 	/* What logrotate does: rename, then SIGHUP. */
 	assert_int_equal(rename(traj, rotated), 0);
+	assert_int_equal(rename(log, log_rotated), 0);
 	kill(pid, SIGHUP);
 	harness_wait_lines(traj, 3, pid);
 	kill(pid, SIGTERM);
@@ -334,6 +347,11 @@ static void test_sighup_reopens_trajectory(void **state)
 	assert_true(b.t[0] > a.t[a.n - 1]);
 	mvod_traj_free(&a);
 	mvod_traj_free(&b);
+	/* The LCM log the same way: every frame's pose in one of the two, the new after the old. */
+	static mvod_pose_t pa[2 * FRAMES], pb[2 * FRAMES];
+	int na = log_poses(log_rotated, pa, 2 * FRAMES), nb = log_poses(log, pb, 2 * FRAMES);
+	assert_int_equal(na + nb, summary_frames(out));
+	assert_true(pb[0].frame > pa[na - 1].frame);
 }
 
 static void test_sigterm_stops_cleanly(void **state)

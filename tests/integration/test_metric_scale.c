@@ -182,12 +182,30 @@ static void test_bad_speed_sources(void **state)
 	char url[320];
 	run_mvod(&r, "bad", "--scale", "external", "--speed-url", "file:///nonexistent/x.lcmlog",
 		 NULL, NULL);
-	refused(&r, 1, "cannot read the LCM log /nonexistent/x.lcmlog");
+	refused(&r, 1, "cannot read log /nonexistent/x.lcmlog");
 	snprintf(url, sizeof(url), "file://%s/out.lcmlog?mode=w", dir);
 	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
 	refused(&r, 1, "a log to write");
 	run_mvod(&r, "bad", "--scale", "external", "--speed-channel", "", NULL, NULL);
 	refused(&r, 2, "speed-channel");
+	/* Checked before LCM reads it: no whole event, or an absurd length LCM would trust. */
+	char path[300];
+	snprintf(path, sizeof(path), "%s/empty.lcmlog", dir);
+	harness_write_file(path, "");
+	snprintf(url, sizeof(url), "file://%s?mode=r", path);
+	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
+	refused(&r, 1, "empty.lcmlog holds no whole event (0 bytes)");
+	/* sync, event 0, time 0, channel length 10, data length 2^31 - 16: then the channel. */
+	static const char garbage[] = "\xed\xa1\xda\x01" "\0\0\0\0\0\0\0\0" "\0\0\0\0\0\0\0\0"
+				      "\0\0\0\x0a" "\x7f\xff\xff\xf0" "MVOD_SPEED" "junk";
+	snprintf(path, sizeof(path), "%s/garbage.lcmlog", dir);
+	FILE *f = fopen(path, "wb");
+	assert_non_null(f);
+	assert_int_equal(fwrite(garbage, 1, sizeof(garbage) - 1, f), sizeof(garbage) - 1);
+	fclose(f);
+	snprintf(url, sizeof(url), "file://%s?mode=r", path);
+	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
+	refused(&r, 1, "garbage.lcmlog is corrupt at byte 0 of 42: event of");
 }
 
 /*

@@ -98,9 +98,11 @@ def tracked_files():
     return [p for p in out.split("\0") if p and os.path.lexists(os.path.join(REPO, p))]
 
 
-def locate(files, base):
-    """The one tracked file called base, wherever a move put it; None unless exactly one."""
-    hits = [p for p in files if os.path.basename(p) == base]
+def locate(files, name):
+    """The one tracked file called name, wherever a move put it; None unless exactly one.
+
+    name is a basename, or the tail of a path (calib/calibrate.c) where two files share one."""
+    hits = [p for p in files if p == name or p.endswith("/" + name)]
     return hits[0] if len(hits) == 1 else None
 
 

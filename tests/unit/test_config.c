@@ -201,6 +201,13 @@ static void test_errors(void **state)
 		     "[0.1, 100]");
 	expect_error(WITH("[lcm]\npose-channel =\n"), "test.conf:4: [lcm] pose-channel",
 		     "non-empty");
+	/* Checked when read, not when the run starts: a usage error like any other value. */
+	expect_error(WITH("[output]\ncamera-to-body = 1,2,3\n"),
+		     "test.conf:4: [output] camera-to-body = 1,2,3: expected 7 numbers "
+		     "x,y,z,qx,qy,qz,qw", NULL);
+	expect_error(WITH("[output]\ncamera-to-body = 0,0,0,0,0,0,2\n"),
+		     "[output] camera-to-body = 0,0,0,0,0,0,2: expected 7 numbers",
+		     "quaternion's norm is 2");
 	expect_error(WITH("[vo]\nfeatures\n"), "test.conf:4: not a [section] or key = value", NULL);
 	expect_error(WITH("[vo\nfeatures = 100\n"), "test.conf:3: not a [section]", NULL);
 	expect_error("features = 100\n", "test.conf:1: features: every key belongs in a section",

@@ -118,7 +118,7 @@ static void make_result(int i, struct mvod_vo_result *res, double q[4])
 	res->pose.t[1] = 2.0;
 	res->pose.t[2] = 3.0;
 	res->state = (enum mvod_track_state)(i % 6);
-	res->scale_source = (enum mvod_scale_source)(i % 5);
+	res->scale_source = (enum mvod_scale_source)(i % 8); /* all 8 of them */
 	res->status = (enum mvod_frame_status)(i % 7);
 	res->features = 1000 + i;
 	res->matches = 500 + i;
@@ -487,31 +487,39 @@ static void test_send_seam(void **state)
 	mvod_ipc_destroy(ipc);
 }
 
-/* Which URLs mvod writes itself: file:// with mode=w among the options, nothing else. */
+/*
+ * Log URLs: file:// with its path and LCM's mode (mvod writes mode=w itself, reads r), nothing
+ * else; an empty path or one too long for the buffer refused.
+ */
 static void test_log_urls(void **state)
 {
+	(void)state;
 	static const struct {
 		const char *url, *path;
+		char mode;
+		int ret;
 	} cases[] = {
-		{"file:///tmp/a.lcm?mode=w", "/tmp/a.lcm"},
-		{"file:///tmp/a.lcm?speed=1&mode=w", "/tmp/a.lcm"},
-		{"file://rel/a.lcm?mode=w&speed=1", "rel/a.lcm"},
-		{"file:///tmp/a.lcm", NULL},          /* LCM's default mode is r: playback */
-		{"file:///tmp/a.lcm?mode=r", NULL},
-		{"file:///tmp/a.lcm?mode=wx", NULL},
-		{"file://?mode=w", ""},               /* no path: -ENAMETOOLONG, refused */
-		{"memq://", NULL},
-		{"tcpq://127.0.0.1:7700", NULL}, /* parsed only: no test sends beyond memq/file */
-		{NULL, NULL},
+		{"file:///tmp/a.lcm?mode=w", "/tmp/a.lcm", 'w', 0},
+		{"file:///tmp/a.lcm?speed=1&mode=w", "/tmp/a.lcm", 'w', 0},
+		{"file://rel/a.lcm?mode=w&speed=1", "rel/a.lcm", 'w', 0},
+		{"file:///tmp/a.lcm", "/tmp/a.lcm", 'r', 0}, /* LCM's default mode is r: playback */
+		{"file:///tmp/a.lcm?mode=r&speed=0", "/tmp/a.lcm", 'r', 0},
+		{"file:///tmp/a.lcm?mode=a", "/tmp/a.lcm", 'a', 0},
+		{"file:///tmp/a.lcm?mode=wx", "/tmp/a.lcm", '?', 0},
+		{"file:///tmp/a.lcm?mode=", "/tmp/a.lcm", '?', 0},
+		{"file://?mode=w", "unchanged", 'w', -EINVAL},
+		{"file:///a/path/longer/than/the/buffer/of/sixty/four/bytes/given/here.lcmlog",
+		 "unchanged", 'r', -ENAMETOOLONG},
+		{"memq://", "unchanged", 'x', -ENOENT},
+		{"tcpq://127.0.0.1:7700", "unchanged", 'x', -ENOENT}, /* parsed only */
+		{NULL, "unchanged", 'x', -ENOENT},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
-		char path[64] = "unchanged";
-		int ret = mvod_lcm_log_url_path(cases[i].url, path, sizeof(path));
-		if (!cases[i].path)
-			assert_int_equal(ret, -ENOENT);
-		else if (!cases[i].path[0])
-			assert_int_equal(ret, -ENAMETOOLONG);
-		else
+		char path[64] = "unchanged", mode = 'x';
+		int ret = mvod_lcm_file_url(cases[i].url, path, sizeof(path), &mode);
+		assert_int_equal(ret, cases[i].ret);
+		assert_int_equal(mode, cases[i].mode);
+		if (ret != -ENAMETOOLONG)
 			assert_string_equal(path, cases[i].path);
 	}
 }

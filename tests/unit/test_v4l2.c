@@ -759,6 +759,16 @@ static void run_fake(volatile sig_atomic_t *stop, struct statuses *got,
 	run_fake_focus(stop, got, sum, NAN);
 }
 
+/* run_fake through the whole script: the fake raises the stop once it is over. */
+static void run_script(struct statuses *got, struct mvod_run_summary *sum)
+{
+	static volatile sig_atomic_t stop;
+	stop = 0;
+	F.done = &stop;
+	*got = (struct statuses){0};
+	run_fake(&stop, got, sum);
+}
+
 /*
  * A calibration made at focus 100 on a camera whose lens is held at 120: the run warns with
  * both values; at 120 it says nothing. stderr is captured in a file for the check.
@@ -816,12 +826,9 @@ static void test_unplug_and_return(void **state)
 	for (int i = 0; i < 6; i++)
 		add_frame(i, (uint32_t)(1000 + i)); /* a new stream numbers afresh */
 	F.fail_opens = 1;
-	static volatile sig_atomic_t stop;
-	stop = 0;
-	F.done = &stop;
-	struct statuses got = {0};
+	struct statuses got;
 	struct mvod_run_summary sum;
-	run_fake(&stop, &got, &sum);
+	run_script(&got, &sum);
 	assert_int_equal(F.opens, 2); /* the first and the one after the refusal */
 	assert_true(sum.live);
 	assert_int_equal(sum.frames + sum.dropped, 12);
@@ -831,6 +838,28 @@ static void test_unplug_and_return(void **state)
 	assert_int_equal(got.last.state, MVOD_RUN_STOPPING);
 	assert_int_equal(got.last.frames, sum.frames);
 	assert_int_equal(got.last.dropped_frames, sum.dropped);
+}
+
+/*
+ * Frames the camera sends broken (buffers cut short) are skipped and counted apart from the
+ * dropped ones, with FAULT_FRAME_UNREADABLE in status: processed + dropped + skipped = sent.
+ */
+static void test_bad_frames_not_dropped(void **state)
+{
+	(void)state;
+	reset(V4L2_PIX_FMT_GREY);
+	for (int i = 0; i < 8; i++)
+		add_frame(i, (uint32_t)i);
+	F.frames[2].len /= 2;
+	F.frames[5].len /= 2;
+	struct statuses got;
+	struct mvod_run_summary sum;
+	run_script(&got, &sum);
+	assert_int_equal(sum.skipped[MVOD_BAD_CORRUPT], 2);
+	assert_int_equal(sum.frames + sum.dropped + 2, 8);
+	assert_int_equal(got.last.frames, sum.frames);
+	assert_int_equal(got.last.dropped_frames, sum.dropped);
+	assert_true(got.last.faults & MVOD_STATUS_T_FAULT_FRAME_UNREADABLE);
 }
 
 /* A stop that comes while the device is away ends the run (it would hang here otherwise). */
@@ -1034,6 +1063,7 @@ int main(void)
 		cmocka_unit_test(test_fewer_buffers),
 		cmocka_unit_test(test_sequence_gaps),
 		cmocka_unit_test(test_corrupt_mjpeg),
+		cmocka_unit_test(test_bad_frames_not_dropped),
 		cmocka_unit_test(test_lens_and_exposure),
 		cmocka_unit_test(test_list),
 		cmocka_unit_test(test_unplug_and_return),

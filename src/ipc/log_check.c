@@ -3,12 +3,16 @@
  *   uint32 sync 0xEDA1DA01, int64 event number, int64 time (us), int32 channel length,
  *   int32 data length, then the channel name and the data.
  */
-#include "view/lcmlog.h"
+#include "ipc/log_check.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
+#include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include "util/errbuf.h"
 
 #define SYNC 0xEDA1DA01u
 #define HEADER_BYTES 28
@@ -102,4 +106,24 @@ int mvod_lcmlog_check(int fd, struct mvod_lcmlog_check *out)
 		out->events++;
 	}
 	return 0;
+}
+
+int mvod_lcmlog_vet(const char *path, struct mvod_lcmlog_check *out, char *err, size_t errlen)
+{
+	/* O_NONBLOCK: a FIFO named as the log must not block the open. */
+	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+	int ret = fd < 0 ? -errno : mvod_lcmlog_check(fd, out);
+	if (fd >= 0)
+		close(fd);
+	if (ret)
+		return mvod_errf(err, errlen, ret, "cannot read log %s: %s", path, strerror(-ret));
+	if (out->events == 0 && (out->bad_offset < 0 || out->cut))
+		return mvod_errf(err, errlen, -ENODATA, "log %s holds no whole event (%lld bytes)",
+				 path, (long long)out->size);
+	if (out->bad_offset < 0 || out->cut)
+		return 0;
+	return mvod_errf(err, errlen, -EIO, "log %s is corrupt at byte %lld of %lld: %s; the "
+			 "%lld events before it are intact (truncate -s %lld keeps only them)", path,
+			 (long long)out->bad_offset, (long long)out->size, out->why,
+			 (long long)out->events, (long long)out->bad_offset);
 }

@@ -5,10 +5,11 @@
  * the log had ended. This reader looks at the 28-byte event headers only, never allocates
  * by a length read from the file, and finds the first place where the log stops being a log.
  */
-#ifndef MVOD_VIEW_LCMLOG_H
-#define MVOD_VIEW_LCMLOG_H
+#ifndef MVOD_IPC_LOG_CHECK_H
+#define MVOD_IPC_LOG_CHECK_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 struct mvod_lcmlog_check {
@@ -22,5 +23,14 @@ struct mvod_lcmlog_check {
 
 /* Checks the log open on fd (read with pread). 0, or -errno when it cannot be read. */
 int mvod_lcmlog_check(int fd, struct mvod_lcmlog_check *out);
+
+/*
+ * What every reader of a log (mvod view, --speed-url file://) does before LCM reads it:
+ * checks the log at path. 0 when LCM can read it safely: sound, or only cut short at its end
+ * (out->cut; the caller may warn). Else a one-line reason naming path in err and -EIO when it
+ * is corrupt (where, and the truncate that keeps the intact events), -ENODATA when it holds
+ * no whole event, -errno when it cannot be read.
+ */
+int mvod_lcmlog_vet(const char *path, struct mvod_lcmlog_check *out, char *err, size_t errlen);
 
 #endif
