@@ -70,45 +70,13 @@ static void move_camera(const struct move *m, double Rc[9], double tc[3])
 		tc[i] += dc[i];
 }
 
-/* Keyframe id is among the job's. */
-static bool in_job(const struct mvod_ba_job *j, mvod_map_id id)
-{
-	for (int i = 0; i < j->p.n_poses; i++)
-		if (j->kf[i] == id)
-			return true;
-	return false;
-}
-
 /*
- * Points the job does not hold (made, or first seen twice, since its snapshot) keep their
- * place in the keyframe's camera: X' = R^T (Rk X + tk - t). Both lists are in slot order.
+ * The tracked frame moves with the snapshot's newest keyframe, as inline, where the keyframe's
+ * frame took the refined pose itself. Keyframes and points made since the snapshot stay where
+ * they are: moving them rigidly with it too was worse on KITTI 07 (free scale, BA on its
+ * thread: scale drift 6.1 and 9.1 in two runs, against 5.3 and 2.9 without).
  */
-static void move_points(struct mvod_mapvo *mv, const struct mvod_ba_job *j, const struct move *m)
-{
-	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), k = 0;
-	for (int i = 0; i < np; i++) {
-		uint32_t slot = (uint32_t)mv->ids[i];
-		while (k < j->p.n_points && (uint32_t)j->pt[k] < slot)
-			k++;
-		if (k < j->p.n_points && j->pt[k] == mv->ids[i])
-			continue;
-		double c[3], X[3];
-		mvod_mat3_vec(m->Rk, mvod_map_point(mv->map, mv->ids[i])->pos, c);
-		for (int a = 0; a < 3; a++)
-			c[a] += m->tk[a] - m->t[a];
-		mvod_mat3_tvec(m->R, c, X);
-		mvod_map_set_point(mv->map, mv->ids[i], X);
-	}
-}
-
-/*
- * What was tracked and mapped since the snapshot moves with its newest keyframe: the tracked
- * frame (as inline, where the keyframe's frame took the refined pose itself), later keyframes
- * and the points the job does not hold. Without this, frames tracked against a corrected
- * window and uncorrected new points would pull the two apart (measured on KITTI 07, free
- * scale, BA on its thread: scale drift 5.3 without, against 1.38 inline).
- */
-static void move_newer(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
+static void move_tracked(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
 {
 	int last = j->p.n_poses - 1;
 	const struct mvod_map_keyframe *k = last >= 0 ? mvod_map_keyframe(mv->map, j->kf[last]) : NULL;
@@ -120,18 +88,6 @@ static void move_newer(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
 	mvod_rot_exp(j->poses + 6 * last, m.R);
 	memcpy(m.t, j->poses + 6 * last + 3, sizeof(m.t));
 	move_camera(&m, mv->Rcw, mv->tcw);
-	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap);
-	for (int i = 0; i < nk; i++) {
-		const struct mvod_map_keyframe *n = mvod_map_keyframe(mv->map, mv->kfs[i]);
-		double R[9], t[3];
-		if (in_job(j, n->id))
-			continue;
-		memcpy(R, n->Rcw, sizeof(R));
-		memcpy(t, n->tcw, sizeof(t));
-		move_camera(&m, R, t);
-		mvod_map_set_pose(mv->map, n->id, R, t);
-	}
-	move_points(mv, j, &m);
 }
 
 /*
@@ -140,7 +96,7 @@ static void move_newer(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
  */
 static void apply(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
 {
-	move_newer(mv, j);
+	move_tracked(mv, j);
 	for (int i = 0; i < j->p.n_poses; i++) {
 		double R[9];
 		mvod_rot_exp(j->poses + 6 * i, R);
@@ -167,9 +123,8 @@ static int land(struct mvod_mapvo *mv, bool wait)
 
 /*
  * A keyframe whose predecessor's bundle adjustment is still running waits for it and lands it
- * first (the new keyframe and its points move with the window): skipping instead left the
- * first keyframes of KITTI 07 (frames 18, 25, 29, in its opening turn) unrefined, and its
- * scale drift went from 1.38 to 5.3.
+ * first: skipping instead left the first keyframes of KITTI 07 (frames 18, 25, 29, in its
+ * opening turn) unrefined, and its scale drift went from 1.38 (inline) to 5.3; waiting, 2.3.
  */
 int mvod_mapping_ba(struct mvod_mapvo *mv)
 {
