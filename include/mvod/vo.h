@@ -151,6 +151,12 @@ struct mvod_vo_params {
 	double min_parallax_px; /* median rotation-compensated flow below this: rotation only. 1.0 */
 	enum mvod_scale_mode scale_mode;
 	double camera_height_m; /* HEIGHT: the camera's height above the ground, metres. 0 */
+	/*
+	 * Map mode: wait for each bundle adjustment at the frame after its keyframe, so results
+	 * do not depend on the machine's speed (tests, benchmarks). false: the frame thread never
+	 * waits; a result lands at the first frame after it is ready.
+	 */
+	bool ba_sync;
 };
 void mvod_vo_params_default(struct mvod_vo_params *p);
 

@@ -136,6 +136,8 @@ void cli_usage_vo(FILE *out)
 "  --mode twoview|map    twoview (default): frame to frame, each step scaled by the structure\n"
 "                        it shares with the last; map: a local map of keyframes and points\n"
 "                        that carries one scale, PnP per frame and windowed bundle adjustment\n"
+"  --ba-sync             map mode: wait for each bundle adjustment (on its own thread) at the\n"
+"                        frame after its keyframe: results independent of the machine's speed\n"
 "  --scale MODE          step length: auto (default) from triangulated structure, the first\n"
 "                        step defines the unit; gt from the ground truth (benchmarking);\n"
 "                        height: metres from the ground plane and --camera-height;\n"

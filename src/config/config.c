@@ -61,6 +61,7 @@ const struct mvod_config_key mvod_config_keys[] = {
 	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1),
 	{KEY("vo", "blur", "blur", MVOD_CONFIG_INT, run.vo.blur_ksize), .lo = 0, .hi = 99,
 	 .odd = true},
+	FLAG("vo", "ba-sync", "ba-sync", run.vo.ba_sync, true),
 	/* 0 = none; above 20 m is no robot's camera: millimetres or feet by mistake. */
 	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0, 20),
 	{KEY("vo", "speed-channel", "speed-channel", MVOD_CONFIG_STRING, run.speed_channel),

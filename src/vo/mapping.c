@@ -22,8 +22,6 @@
 #define MAX_COS_PARALLAX 0.9998
 /* Keyframes before the new one that it triangulates against (the descriptor table each). */
 #define TRIANGULATE_WITH 3
-/* Bundle adjustment's Levenberg-Marquardt iterations per keyframe. */
-#define BA_ITERATIONS 5
 
 /* World point X seen by keypoint kp from camera-from-world R, t: within the gate, in front. */
 static bool reprojects(const double K[4], const double R[9], const double t[3],
@@ -293,77 +291,5 @@ int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added)
 		mv->cur_pt[j] = k->pt[j];
 	mv->since_kf = 0;
 	*added = true;
-	return 0;
-}
-
-/* Index of kf among the window's keyframes (mv->kfs, nk of them), or -1. */
-static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
-{
-	for (int i = 0; i < nk; i++)
-		if (mv->kfs[i] == kf)
-			return i;
-	return -1;
-}
-
-/* The window's problem: poses of the nk keyframes, points seen twice or more, observations. */
-static void ba_build(struct mvod_mapvo *mv, int nk, struct mvod_ba_problem *p)
-{
-	for (int i = 0; i < nk; i++) {
-		const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, mv->kfs[i]);
-		mvod_rot_log(k->Rcw, mv->ba_poses + 6 * i);
-		memcpy(mv->ba_poses + 6 * i + 3, k->tcw, sizeof(k->tcw));
-		mv->ba_fixed[i] = i < 2; /* the gauge: position, orientation and scale */
-	}
-	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), nb = 0, no = 0;
-	for (int i = 0; i < np; i++) {
-		const struct mvod_map_point *pt = mvod_map_point(mv->map, mv->ids[i]);
-		if (pt->n_obs < 2)
-			continue;
-		for (int o = 0; o < pt->n_obs; o++) {
-			const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, pt->obs[o].kf);
-			const struct mvod_map_kp *kp = &k->kp[pt->obs[o].kp];
-			mv->ba_obs[no] = (struct mvod_ba_obs){kf_index(mv, nk, pt->obs[o].kf), nb,
-							      kp->x, kp->y,
-							      mvod_mapvo_sigma(kp->octave)};
-			mv->ba_obs_kf[no++] = pt->obs[o].kf;
-		}
-		memcpy(mv->ba_points + 3 * nb, pt->pos, sizeof(pt->pos));
-		mv->ids[nb++] = mv->ids[i]; /* ids[] now names the problem's points */
-	}
-	*p = (struct mvod_ba_problem){nk, nb, no, mv->ba_poses, mv->ba_points, mv->ba_fixed,
-				      mv->ba_obs, mv->ba_out, mv->K[0], mv->K[1], mv->K[2],
-				      mv->K[3]};
-}
-
-/* The solution back into the map; outlying observations leave their points. */
-static void ba_write(struct mvod_mapvo *mv, const struct mvod_ba_problem *p)
-{
-	for (int i = 0; i < p->n_poses; i++) {
-		double R[9];
-		mvod_rot_exp(mv->ba_poses + 6 * i, R);
-		mvod_map_set_pose(mv->map, mv->kfs[i], R, mv->ba_poses + 6 * i + 3);
-	}
-	for (int i = 0; i < p->n_points; i++)
-		mvod_map_set_point(mv->map, mv->ids[i], mv->ba_points + 3 * i);
-	for (int o = 0; o < p->n_obs; o++)
-		if (mv->ba_out[o])
-			mvod_map_remove_obs(mv->map, mv->ids[mv->ba_obs[o].point], mv->ba_obs_kf[o]);
-}
-
-int mvod_mapping_ba(struct mvod_mapvo *mv)
-{
-	if (!mv->ba)
-		return 0;
-	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap);
-	struct mvod_ba_problem p;
-	ba_build(mv, nk, &p);
-	struct mvod_ba_options o;
-	mvod_ba_options_default(&o);
-	o.max_iterations = BA_ITERATIONS;
-	struct mvod_ba_result r;
-	int ret = mvod_ba_solve(mv->ba, &p, &o, &r);
-	if (ret)
-		return ret;
-	ba_write(mv, &p);
 	return 0;
 }

@@ -44,20 +44,13 @@ static int alloc_arrays(struct mvod_mapvo *mv)
 	mv->fb.desc = calloc(c, MVOD_MAP_DESC_BYTES);
 	mv->ia = calloc(c, sizeof(int));
 	mv->ib = calloc(c, sizeof(int));
-	mv->ba_poses = calloc(nk * 6, sizeof(double));
-	mv->ba_points = calloc(np * 3, sizeof(double));
-	mv->ba_fixed = calloc(nk, 1);
-	mv->ba_obs = calloc(np * nk, sizeof(*mv->ba_obs));
-	mv->ba_obs_kf = calloc(np * nk, sizeof(*mv->ba_obs_kf));
-	mv->ba_out = calloc(np * nk, 1);
 	mv->kfs = calloc(nk, sizeof(*mv->kfs));
 	mv->fa.cap = mv->fb.cap = mv->cap;
 	mv->fa.desc_bytes = mv->fb.desc_bytes = MVOD_MAP_DESC_BYTES;
 	bool ok = mv->kp && mv->cur_pt && mv->ref_pt && mv->ids && mv->pos && mv->desc &&
 		  mv->match && mv->X && mv->uv && mv->sigma && mv->pidx && mv->inlier &&
 		  mv->fa.kp && mv->fb.kp && mv->fa.desc && mv->fb.desc && mv->ia && mv->ib &&
-		  mv->ba_poses && mv->ba_points && mv->ba_fixed && mv->ba_obs && mv->ba_obs_kf &&
-		  mv->ba_out && mv->kfs;
+		  mv->kfs;
 	return ok ? 0 : -ENOMEM;
 }
 
@@ -75,7 +68,7 @@ static int create_parts(const struct mvod_vo *vo, struct mvod_mapvo *mv)
 	ret = mvod_pnp_create(&np, vo->cap, &mv->pnp);
 	if (ret)
 		return ret;
-	ret = mvod_ba_create(&mv->ba);
+	ret = mvod_ba_thread_create(mv->mp.kf_cap, mv->mp.point_cap, &mv->bat);
 	return ret == -ENOTSUP ? 0 : ret; /* without Ceres: no window refinement */
 }
 
@@ -88,6 +81,7 @@ int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)
 	if (!mv)
 		return -ENOMEM;
 	mv->cap = vo->cap;
+	mv->ba_sync = vo->p.ba_sync;
 	mvod_map_params_default(&mv->mp);
 	mv->mp.kp_cap = vo->cap;
 	mv->K[0] = vo->cam.fx, mv->K[1] = vo->cam.fy, mv->K[2] = vo->cam.cx, mv->K[3] = vo->cam.cy;
@@ -111,11 +105,10 @@ void mvod_mapvo_destroy(struct mvod_mapvo *mv)
 	mvod_map_destroy(mv->map);
 	mvod_pm_destroy(mv->pm);
 	mvod_pnp_destroy(mv->pnp);
-	mvod_ba_destroy(mv->ba);
+	mvod_ba_thread_destroy(mv->bat);
 	void *arrays[] = {mv->kp, mv->cur_pt, mv->ref_pt, mv->ids, mv->pos, mv->desc, mv->match,
 			  mv->X, mv->uv, mv->sigma, mv->pidx, mv->inlier, mv->fa.kp, mv->fb.kp,
-			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->ba_poses, mv->ba_points,
-			  mv->ba_fixed, mv->ba_obs, mv->ba_obs_kf, mv->ba_out, mv->kfs};
+			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->kfs};
 	for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++)
 		free(arrays[i]);
 	free(mv);
@@ -316,6 +309,9 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 {
 	struct mvod_mapvo *mv = vo->mapvo;
 	const struct mvod_features *f = &vo->cur->f;
+	int ret = mvod_mapping_ba_poll(mv); /* a frame boundary: bundle adjustment lands here */
+	if (ret)
+		return ret;
 	if (!mv->active)
 		return 0;
 	res->features = f->n;
@@ -325,7 +321,7 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 		return 1;
 	}
 	to_map_kp(f, mv->kp);
-	int ret = mvod_pm_set_frame(mv->pm, mv->kp, f->desc, f->n);
+	ret = mvod_pm_set_frame(mv->pm, mv->kp, f->desc, f->n);
 	if (ret)
 		return ret;
 	int np = gather(mv);

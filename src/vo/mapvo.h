@@ -16,7 +16,7 @@
 
 #include <stdbool.h>
 
-#include "ba_shim.h"
+#include "ba_thread.h"
 #include "map.h"
 #include "pnp_shim.h"
 #include "project_match.h"
@@ -27,7 +27,9 @@ struct mvod_mapvo {
 	struct mvod_map_params mp;
 	struct mvod_pm *pm;
 	struct mvod_pnp *pnp;
-	struct mvod_ba *ba; /* NULL without Ceres: the window is not refined */
+	/* Bundle adjustment's thread; NULL without Ceres: the window is not refined. */
+	struct mvod_ba_thread *bat;
+	bool ba_sync; /* each result is waited for at the frame after its keyframe */
 	int cap;            /* keypoints per frame (the VO's cap) */
 	double K[4];        /* fx, fy, cx, cy of the preprocessed image */
 	/* The current frame, in the map's form: keypoints, and the point each one tracks. */
@@ -47,13 +49,7 @@ struct mvod_mapvo {
 	/* Triangulation: the unmatched keypoints of two keyframes as feature sets. */
 	struct mvod_features fa, fb;
 	int *ia, *ib; /* [cap] keypoint index in the keyframe of each entry of fa, fb */
-	/* Bundle adjustment: the window's problem. */
-	double *ba_poses, *ba_points; /* [kf_cap * 6], [point_cap * 3] */
-	uint8_t *ba_fixed;            /* [kf_cap] */
-	struct mvod_ba_obs *ba_obs;   /* [point_cap * kf_cap] */
-	mvod_map_id *ba_obs_kf;       /* [point_cap * kf_cap] keyframe of each observation */
-	uint8_t *ba_out;              /* [point_cap * kf_cap] */
-	mvod_map_id *kfs;             /* [kf_cap] */
+	mvod_map_id *kfs; /* [kf_cap] the window's keyframes */
 	/* State. */
 	bool active;           /* a map exists and the last frames tracked against it */
 	bool had_map;          /* a map existed: later ones carry its scale (the last speed) */
@@ -88,8 +84,19 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
 
 /* Mapping (mapping.c): the current frame, tracked at mv->Rcw, tcw, becomes a keyframe. */
 int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added);
-/* Windowed bundle adjustment: the two oldest keyframes held (the gauge: position and scale). */
+/*
+ * Windowed bundle adjustment (mapping_ba.c), the two oldest keyframes held (the gauge:
+ * position and scale): posts the window to the BA thread, unless it is still busy with the
+ * last one (that keyframe then goes without).
+ */
 int mvod_mapping_ba(struct mvod_mapvo *mv);
+/*
+ * At the start of a frame: writes a finished bundle adjustment into the map (its keyframes and
+ * points still alive) and moves the tracked pose with the newest of its keyframes. With
+ * ba_sync it waits for a posted one, so a result always lands at the frame after its keyframe
+ * whatever the machine's speed: runs are reproducible. The solver's error, else 0.
+ */
+int mvod_mapping_ba_poll(struct mvod_mapvo *mv);
 
 /* Pixel sigma of a keypoint on pyramid level octave: ORB's scale step 1.2 per level. */
 double mvod_mapvo_sigma(int octave);

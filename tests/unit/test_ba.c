@@ -1,6 +1,7 @@
 /*
  * Windowed bundle adjustment on exact synthetic data: perturbed poses and points come back,
- * a gross outlier is flagged. Exits 77 (skipped) when mvod is built without Ceres.
+ * a gross outlier is flagged; the BA thread hands the job over and back and solves exactly as
+ * the caller's thread would. Exits 77 (skipped) when mvod is built without Ceres.
  */
 #include <errno.h>
 #include <setjmp.h>
@@ -16,6 +17,7 @@
 
 #include "scene.h"
 #include "vo/ba_shim.h"
+#include "vo/ba_thread.h"
 
 #define POSES 7
 #define MAX_PTS 2000
@@ -215,6 +217,47 @@ static void test_kitti_sized_window(void **state)
 	assert_true(e_trans < 1e-4); /* as in test_recovers_window, with a smaller start error */
 }
 
+/*
+ * The BA thread's job changes hands as documented (the caller cannot fill it while posted or
+ * while its result waits) and its solution is bit for bit the one mvod_ba_solve gives on the
+ * caller's thread: Ceres with one thread is deterministic, so --ba-sync runs are reproducible.
+ */
+static void test_thread_solves_as_inline(void **state)
+{
+	struct mvod_ba_thread *t;
+	assert_int_equal(mvod_ba_thread_create(POSES, MAX_PTS, &t), 0);
+	struct mvod_ba_job *j = mvod_ba_thread_job(t), *done;
+	assert_non_null(j);
+	assert_false(mvod_ba_thread_take(t, true, &done)); /* nothing posted: no wait, no job */
+	make_window(200);
+	perturb(0.01, 0.1, 0.3);
+	memcpy(j->poses, win.poses, sizeof(win.poses));
+	memcpy(j->points, win.pts, sizeof(double) * 3 * win.n_pts);
+	memcpy(j->fixed, win.fixed, sizeof(win.fixed));
+	memcpy(j->obs, win.obs, sizeof(win.obs[0]) * win.n_obs);
+	j->p = (struct mvod_ba_problem){POSES, win.n_pts, win.n_obs, j->poses, j->points,
+					j->fixed, j->obs, j->outlier, SCENE_F, SCENE_F,
+					SCENE_CX, SCENE_CY};
+	mvod_ba_options_default(&j->o);
+	mvod_ba_thread_post(t);
+	assert_null(mvod_ba_thread_job(t)); /* the BA thread's, or its result's */
+	assert_true(mvod_ba_thread_take(t, true, &done));
+	assert_ptr_equal(done, j);
+	assert_false(mvod_ba_thread_take(t, false, &done)); /* taken once */
+	assert_non_null(mvod_ba_thread_job(t));
+	struct mvod_ba_problem p = problem();
+	struct mvod_ba_result r;
+	assert_int_equal(mvod_ba_solve(*state, &p, &j->o, &r), 0);
+	assert_int_equal(j->ret, 0);
+	assert_int_equal(j->r.iterations, r.iterations);
+	assert_memory_equal(j->poses, win.poses, sizeof(win.poses));
+	assert_memory_equal(j->points, win.pts, sizeof(double) * 3 * win.n_pts);
+	/* Posted and not taken: destroy waits for the solve and stops the thread. */
+	mvod_ba_thread_post(t);
+	mvod_ba_thread_destroy(t);
+	mvod_ba_thread_destroy(NULL);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -222,6 +265,7 @@ int main(void)
 		cmocka_unit_test(test_flags_outlier),
 		cmocka_unit_test(test_bad_problem),
 		cmocka_unit_test(test_kitti_sized_window),
+		cmocka_unit_test(test_thread_solves_as_inline),
 	};
 	return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -56,6 +56,7 @@ static const char every_key[] =
 	"min-parallax = 3\n"
 	"resize = 0.5\n"
 	"blur = 5\n"
+	"ba-sync = yes\n"
 	"[lcm]\n"
 	"enabled = no\n"
 	"url = memq://\n"
@@ -96,6 +97,7 @@ static void assert_every_key(const struct mvod_config *c)
 	assert_int_equal(c->run.vo.mode, MVOD_VO_MAP);
 	assert_true(c->run.vo.resize == 0.5);
 	assert_int_equal(c->run.vo.blur_ksize, 5);
+	assert_true(c->run.vo.ba_sync);
 	assert_false(c->lcm_enabled);
 	assert_string_equal(c->lcm_url, "memq://");
 	assert_string_equal(c->pose_channel, "P");
