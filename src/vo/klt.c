@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "klt_shim.h"
+#include "scale.h"
 
 /*
  * Lucas-Kanade window, pixels, and pyramid levels above the image, with at most ITERATIONS
@@ -320,6 +321,81 @@ int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvo
 	f->n = k->n;
 	*n_matches = m;
 	return 0;
+}
+
+/* Ranked FAST corners of the rows quad spans, inside it; their count. */
+static int band_corners(struct mvod_klt *k, const struct mvod_image *grey, const float quad[8],
+			int threshold, int *nc)
+{
+	float y0 = quad[1], y1 = quad[1];
+	for (int c = 1; c < 4; c++) {
+		y0 = fminf(y0, quad[2 * c + 1]);
+		y1 = fmaxf(y1, quad[2 * c + 1]);
+	}
+	int top = y0 > BORDER ? (int)y0 : BORDER, bottom = y1 < k->h ? (int)y1 : k->h;
+	*nc = 0;
+	if (bottom - top < 2 * BORDER + 1)
+		return 0;
+	/* FAST on the band's rows only: a view into grey. */
+	struct mvod_image rows = *grey;
+	rows.data = grey->data + (size_t)top * (size_t)grey->stride;
+	rows.h = bottom - top;
+	int nf, ret = mvod_klt_cv_fast(k->cv, &rows, threshold, k->fast_xy, &nf);
+	for (int i = 0; i < nf && !ret; i++) {
+		float x = k->fast_xy[2 * i], y = k->fast_xy[2 * i + 1] + (float)top;
+		float s = inside(k, x, y) && mvod_quad_contains(quad, x, y) ? harris(grey, (int)x, (int)y)
+									    : 0;
+		if (s > 0)
+			k->corners[(*nc)++] = (struct corner){x, y, s};
+	}
+	sort_by_score(k->corners, *nc);
+	return ret;
+}
+
+/* The slot a new band track takes: free capacity, else the youngest unmatched track outside. */
+static int band_slot(struct mvod_klt *k, const float quad[8], int *victim)
+{
+	if (k->n < k->p.max_tracks)
+		return k->n++;
+	for (; *victim >= 0; (*victim)--) {
+		int j = *victim;
+		if (k->ref[j] < 0 && !mvod_quad_contains(quad, k->pos[2 * j], k->pos[2 * j + 1]))
+			return (*victim)--;
+	}
+	return -1;
+}
+
+int mvod_klt_reserve(struct mvod_klt *k, const struct mvod_image *grey, const float quad[8],
+		     int share, int band_threshold, struct mvod_features *f, int *added)
+{
+	int have = 0, nc, victim = k->n - 1, n_added = 0;
+	memset(k->occ, 0, (size_t)k->occ_w * (size_t)k->occ_h);
+	for (int i = 0; i < k->n; i++) {
+		have += mvod_quad_contains(quad, k->pos[2 * i], k->pos[2 * i + 1]);
+		k->occ[occ_index(k, k->pos[2 * i], k->pos[2 * i + 1])] = 1;
+	}
+	int ret = have < share ? band_corners(k, grey, quad, band_threshold, &nc) : (nc = 0);
+	for (int i = 0; i < nc && have + n_added < share && !ret; i++) {
+		const struct corner *c = &k->corners[i];
+		int o = occ_index(k, c->x, c->y), j;
+		if (k->occ[o])
+			continue;
+		if ((j = band_slot(k, quad, &victim)) < 0)
+			break;
+		k->occ[o] = 1;
+		k->pos[2 * j] = c->x;
+		k->pos[2 * j + 1] = c->y;
+		k->vel[2 * j] = k->vel[2 * j + 1] = 0;
+		k->err[j] = 0;
+		k->score[j] = c->score;
+		k->ref[j] = -1;
+		f->kp[j] = (struct mvod_keypoint){c->x, c->y, 0, c->score};
+		n_added++;
+	}
+	f->n = k->n;
+	if (added)
+		*added = n_added;
+	return ret;
 }
 
 void mvod_klt_promote(struct mvod_klt *k)

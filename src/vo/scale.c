@@ -4,8 +4,6 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
-#include <stdio.h>
-#include <stdlib.h>
 
 #include "util/linalg.h"
 
@@ -15,8 +13,23 @@
  * high under a 1.6 m camera is 9 % off.
  */
 #define GROUND_BAND 0.04
-/* Second extent of the inliers against their first, at least (see refit_normal). */
-#define GROUND_AREA 0.33
+/*
+ * Second extent (standard deviation) of the inliers against their first, at least (see
+ * refit_normal). The road band (scale.h) is 4 heights wide and 13 deep: points spread evenly
+ * over it have 0.31; a line of points (a kerb's edge, a car's sill) has its noise over its
+ * length, under 0.05.
+ */
+#define GROUND_AREA 0.15
+/*
+ * Pitches tried about the expected normal's: +-4 deg in 0.5 deg steps. On KITTI 06 the band's
+ * heights along (0, 1, 0) fell by 15 % from 7 to 13 m ahead (a 1.8 deg pitch between the
+ * camera and the road), spreading them over 4 bands: no height had 20 points until the pitch
+ * was searched. A pitch half a step off (0.25 deg) moves a point 13 heights ahead by 0.057
+ * heights, beyond the +-0.04 band: such a step loses its farthest points; 0.25 deg steps
+ * would double the search's cost (17 x 64 x m height counts).
+ */
+#define GROUND_PITCH_STEPS 8
+#define GROUND_PITCH_STEP_DEG 0.5
 /* Heights tried: at most this many candidates' own, evenly spread over them. */
 #define GROUND_HYPOTHESES 64
 
@@ -45,7 +58,7 @@ static int heights(const double *X, int n, const double prior[3], double *d)
  * as the best supported one, and min_inliers: nothing real lies below the ground, while the
  * tops of cars and kerbs beside the road may gather more points than the road itself.
  */
-static double lowest_height(const double *d, int m, int min_inliers)
+static double lowest_height(const double *d, int m, int min_inliers, int *support)
 {
 	int step = m > GROUND_HYPOTHESES ? m / GROUND_HYPOTHESES : 1, count[GROUND_HYPOTHESES + 1];
 	int best = 0, k = 0;
@@ -57,16 +70,19 @@ static double lowest_height(const double *d, int m, int min_inliers)
 	}
 	double h = 0;
 	k = 0;
+	*support = 0;
 	for (int i = 0; i < m && k <= GROUND_HYPOTHESES; i += step, k++)
-		if (count[k] >= min_inliers && 2 * count[k] >= best && d[i] > h)
+		if (count[k] >= min_inliers && 2 * count[k] >= best && d[i] > h) {
 			h = d[i];
+			*support = count[k];
+		}
 	return h;
 }
 
 /*
  * Least-squares normal of the points within the band of g (the covariance's least axis).
- * False when they do not spread over an area: a ground patch is wider and deeper than a
- * third of its longest extent, while a car's sill or a kerb's edge is a line.
+ * False when they do not spread over an area: a ground patch is wider than GROUND_AREA of its
+ * depth, while a car's sill or a kerb's edge is a line.
  */
 static bool refit_normal(const double *X, int n, const double prior[3], struct mvod_ground *g)
 {
@@ -96,22 +112,53 @@ static bool refit_normal(const double *X, int n, const double prior[3], struct m
 	return true;
 }
 
+/* prior turned by deg about the camera's x axis (a change of pitch), into out. */
+static void pitched(const double prior[3], double deg, double out[3])
+{
+	double c = cos(deg * M_PI / 180), s = sin(deg * M_PI / 180);
+	out[0] = prior[0];
+	out[1] = c * prior[1] - s * prior[2];
+	out[2] = s * prior[1] + c * prior[2];
+}
+
+/*
+ * The pitch (within +-GROUND_PITCH_STEPS steps of GROUND_PITCH_STEP_DEG of prior's) whose
+ * ground height the most points support, into best; that height, or 0 when none has
+ * min_inliers. Zero pitch first, then outwards: a tie keeps the pitch nearest the prior's.
+ */
+static double best_pitch(const double *X, int n, const double prior[3], int min_inliers,
+			 double *scratch, double best[3])
+{
+	double h = 0;
+	int most = 0;
+	for (int i = 0; i <= 2 * GROUND_PITCH_STEPS; i++) {
+		double nn[3], hi;
+		int support, step = (i + 1) / 2 * (i % 2 ? 1 : -1);
+		pitched(prior, step * GROUND_PITCH_STEP_DEG, nn);
+		hi = lowest_height(scratch, heights(X, n, nn, scratch), min_inliers, &support);
+		if (hi > 0 && support > most) {
+			most = support;
+			h = hi;
+			memcpy(best, nn, sizeof(nn));
+		}
+	}
+	return h;
+}
+
 int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inliers,
 		    double *scratch, struct mvod_ground *g)
 {
-	int m = heights(X, n, prior, scratch);
-	double h = lowest_height(scratch, m, min_inliers > 3 ? min_inliers : 3);
+	double np[3];
+	double h = best_pitch(X, n, prior, min_inliers > 3 ? min_inliers : 3, scratch, np);
 	if (h <= 0)
 		return -ENODATA;
-	int k = 0;
+	int m = heights(X, n, np, scratch), k = 0;
 	for (int i = 0; i < m; i++)
 		if (fabs(scratch[i] - h) < GROUND_BAND * h)
 			scratch[k++] = scratch[i];
 	g->h = mvod_median(scratch, k);
-	if (getenv("GDEBUG")) { fprintf(stderr, "GFIT h=%.2f inl=%d m=%d:", g->h, k, m);
-	  for (int i = 0; i < n; i++) { const double *p = X + 3*i; if (!below(p)) continue; double hh = dot3(prior, p); fprintf(stderr, " %.1f/%.0f/%.2f", hh, p[2], p[0]/p[2]); } fprintf(stderr, "\n"); }
 	g->inliers = k;
-	return refit_normal(X, n, prior, g) ? 0 : -ENODATA;
+	return refit_normal(X, n, np, g) ? 0 : -ENODATA;
 }
 
 void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g)
@@ -163,4 +210,54 @@ bool mvod_scale_filter_metric(const struct mvod_scale_filter *f)
 double mvod_scale_filter_confidence(const struct mvod_scale_filter *f)
 {
 	return f->since < 0 ? 0.0 : f->quality * pow(MVOD_SCALE_DECAY, f->since);
+}
+
+/* A unit vector along the ground (perpendicular to n) from v; false when v is along n. */
+static bool along_ground(const double n[3], const double v[3], double out[3])
+{
+	double d = dot3(n, v), len = 0;
+	for (int k = 0; k < 3; k++) {
+		out[k] = v[k] - d * n[k];
+		len += out[k] * out[k];
+	}
+	len = sqrt(len);
+	for (int k = 0; k < 3; k++)
+		out[k] /= len;
+	return len > 1e-6;
+}
+
+int mvod_ground_band_quad(const double n[3], double fx, double fy, double cx, double cy,
+			  float quad[8])
+{
+	static const double ez[3] = {0, 0, 1}, ex[3] = {1, 0, 0};
+	/* Corners in order around the band: near left, near right, far right, far left. */
+	static const double corner[4][2] = {{MVOD_BAND_NEAR, -MVOD_BAND_HALF_WIDTH},
+					    {MVOD_BAND_NEAR, MVOD_BAND_HALF_WIDTH},
+					    {MVOD_BAND_FAR, MVOD_BAND_HALF_WIDTH},
+					    {MVOD_BAND_FAR, -MVOD_BAND_HALF_WIDTH}};
+	double fwd[3], side[3];
+	if (!along_ground(n, ez, fwd) || !along_ground(n, ex, side))
+		return -EINVAL;
+	for (int c = 0; c < 4; c++) {
+		double P[3]; /* on the ground, in units of the camera's height */
+		for (int k = 0; k < 3; k++)
+			P[k] = n[k] + corner[c][0] * fwd[k] + corner[c][1] * side[k];
+		if (!(P[2] > 0))
+			return -EINVAL;
+		quad[2 * c] = (float)(fx * P[0] / P[2] + cx);
+		quad[2 * c + 1] = (float)(fy * P[1] / P[2] + cy);
+	}
+	return 0;
+}
+
+bool mvod_quad_contains(const float quad[8], float x, float y)
+{
+	int pos = 0, neg = 0;
+	for (int c = 0; c < 4; c++) {
+		const float *a = quad + 2 * c, *b = quad + 2 * ((c + 1) % 4);
+		float cross = (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+		pos += cross > 0;
+		neg += cross < 0;
+	}
+	return !(pos && neg);
 }

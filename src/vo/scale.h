@@ -41,6 +41,28 @@ int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inlie
 void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g);
 
 /*
+ * The road band: the part of the ground where a car's own lane lies, where the height is
+ * measured. In units of the camera's height, along the ground: from MVOD_BAND_NEAR to
+ * MVOD_BAND_FAR ahead and MVOD_BAND_HALF_WIDTH to either side. Near: KITTI's image
+ * bottom sees the road from 3.9 heights (6.4 m) and mvod-synth's from 3.8; 2 heights keeps
+ * the band's near edge below any image. Far: 15 heights (25 m on KITTI, 10-25 baselines at
+ * 1 m a step) where the depth noise of 0.3 px flow is ~1 %, a quarter of the inlier band.
+ * Half width: 2 heights (3.3 m) holds the 3.5 m lane and its edges, not parked cars.
+ */
+#define MVOD_BAND_NEAR 2.0
+#define MVOD_BAND_FAR 15.0
+#define MVOD_BAND_HALF_WIDTH 2.0
+/*
+ * The band seen through a pinhole camera (pixels, fx fy cx cy) whose ground normal is n (camera
+ * frame, unit, pointing down): quad receives its 4 corners (x, y) in order around it. -EINVAL
+ * when the band is not in front of the camera (a normal more than ~86 deg from down).
+ */
+int mvod_ground_band_quad(const double n[3], double fx, double fy, double cx, double cy,
+			  float quad[8]);
+/* Whether (x, y) lies inside or on the convex quadrilateral quad (4 corners in order). */
+bool mvod_quad_contains(const float quad[8], float x, float y);
+
+/*
  * The scale filter: each measurement is a ratio, metric value / predicted value (for
  * two-view mode, the step length in metres / the step structure predicts). The first one is
  * taken whole; later ones move the scale by gain in log space, and a ratio beyond the gate

@@ -76,10 +76,15 @@ static double measured_step(struct mvod_vo *vo, int n, double *q)
 	*q = 1.0;
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL)
 		return fabs(vo->cur->odo - vo->ref->odo);
-	/* The structure in the reference's frame with a unit baseline, so h is in baselines. */
+	/* The road band's structure in the reference's frame, unit baseline: h in baselines. */
+	float quad[8];
+	if (mvod_ground_band_quad(vo->scale.ground_n, vo->cam.fx, vo->cam.fy, vo->cam.cx,
+				  vo->cam.cy, quad) != 0)
+		return NAN;
 	int m = 0;
 	for (int i = 0; i < n; i++) {
-		if (!well_triangulated(vo, i))
+		const struct mvod_keypoint *kp = &vo->ref->f.kp[vo->matches[i].a];
+		if (!well_triangulated(vo, i) || !mvod_quad_contains(quad, kp->x, kp->y))
 			continue;
 		double *X = vo->prev_pts + 3 * m++;
 		X[0] = vo->x1[2 * i] * vo->depth[i];
