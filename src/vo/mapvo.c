@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "klt.h"
 
 /*
  * A frame becomes a keyframe when it tracks fewer than this share of the points the last
@@ -45,12 +46,14 @@ static int alloc_arrays(struct mvod_mapvo *mv)
 	mv->ia = calloc(c, sizeof(int));
 	mv->ib = calloc(c, sizeof(int));
 	mv->kfs = calloc(nk, sizeof(*mv->kfs));
+	mv->cur_first = calloc(c, sizeof(*mv->cur_first));
+	mv->ref_first = calloc(c, sizeof(*mv->ref_first));
 	mv->fa.cap = mv->fb.cap = mv->cap;
 	mv->fa.desc_bytes = mv->fb.desc_bytes = MVOD_MAP_DESC_BYTES;
 	bool ok = mv->kp && mv->cur_pt && mv->ref_pt && mv->ids && mv->pos && mv->desc &&
 		  mv->match && mv->X && mv->uv && mv->sigma && mv->pidx && mv->inlier &&
 		  mv->fa.kp && mv->fb.kp && mv->fa.desc && mv->fb.desc && mv->ia && mv->ib &&
-		  mv->kfs;
+		  mv->kfs && mv->cur_first && mv->ref_first;
 	return ok ? 0 : -ENOMEM;
 }
 
@@ -108,7 +111,8 @@ void mvod_mapvo_destroy(struct mvod_mapvo *mv)
 	mvod_ba_thread_destroy(mv->bat);
 	void *arrays[] = {mv->kp, mv->cur_pt, mv->ref_pt, mv->ids, mv->pos, mv->desc, mv->match,
 			  mv->X, mv->uv, mv->sigma, mv->pidx, mv->inlier, mv->fa.kp, mv->fb.kp,
-			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->kfs};
+			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->kfs, mv->cur_first,
+			  mv->ref_first};
 	for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++)
 		free(arrays[i]);
 	free(mv);
@@ -258,7 +262,12 @@ static void promote_tracked(struct mvod_vo *vo, const double *gt)
 	mvod_map_id *k = mv->ref_pt;
 	mv->ref_pt = mv->cur_pt;
 	mv->cur_pt = k;
+	struct mvod_map_obs *first = mv->ref_first;
+	mv->ref_first = mv->cur_first;
+	mv->cur_first = first;
 	mvod_vo_promote(vo, gt, false);
+	if (vo->klt)
+		mvod_klt_promote(vo->klt);
 }
 
 /* A frame tracked with k PnP pairs (inlier[] set): counters, pose, keyframe, result. */
@@ -305,6 +314,64 @@ static void predict(const struct mvod_mapvo *mv, double R[9], double t[3])
 		t[k] = v[k] + mv->vt[k];
 }
 
+/*
+ * --frontend klt: the 2D-3D pairs are the tracks the KLT carried from the reference frame whose
+ * keypoint there observes a live point, laid out as mark_tracked reads them (ids[k], match[k] =
+ * keypoint, pidx[k] = k); each track's first keyframe comes along. Returns the pairs.
+ */
+static int klt_pairs(struct mvod_vo *vo)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	int k = 0;
+	for (int j = 0; j < vo->cur->f.n; j++)
+		mv->cur_first[j] = (struct mvod_map_obs){MVOD_MAP_NONE, 0};
+	for (int i = 0; i < vo->klt_matches; i++) {
+		int a = vo->matches[i].a, b = vo->matches[i].b;
+		mv->cur_first[b] = mv->ref_first[a];
+		const struct mvod_map_point *p = mvod_map_point(mv->map, mv->ref_pt[a]);
+		if (!p)
+			continue;
+		mv->ids[k] = p->id;
+		mv->match[k] = b;
+		k = add_pair(mv, k, p->pos, &mv->kp[b], k);
+	}
+	return k;
+}
+
+/*
+ * KLT tracking: the pose refined from the prediction (R, t in and out) on the tracked points;
+ * PnP-RANSAC on the same pairs only when that fails. Returns the inliers or -errno; *np the
+ * pairs, as mark_tracked counts them.
+ */
+static int track_klt(struct mvod_vo *vo, double R[9], double t[3], int *np)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	int n = klt_pairs(vo);
+	*np = mv->n_pairs = n;
+	if (n < vo->p.min_matches)
+		return -ENODATA;
+	int k = mvod_pnp_refine(mv->pnp, mv->X, mv->uv, mv->sigma, n, mv->K, R, t, mv->inlier);
+	if (k < vo->p.min_matches)
+		k = mvod_pnp_solve(mv->pnp, mv->X, mv->uv, mv->sigma, n, mv->K, R, t, mv->inlier);
+	return k;
+}
+
+/* ORB: the map's points matched by projection from the prediction, else re-found. */
+static int track_orb(struct mvod_vo *vo, double R[9], double t[3], int *np,
+		     struct mvod_vo_result *res)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	const struct mvod_features *f = &vo->cur->f;
+	int ret = mvod_pm_set_frame(mv->pm, mv->kp, f->desc, f->n);
+	if (ret)
+		return ret;
+	*np = gather(mv);
+	int k = track_projection(mv, *np, R, t);
+	if (k < vo->p.min_matches)
+		k = refind(vo, *np, R, t, res);
+	return k;
+}
+
 int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
 {
 	struct mvod_mapvo *mv = vo->mapvo;
@@ -321,15 +388,12 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 		return 1;
 	}
 	to_map_kp(f, mv->kp);
-	ret = mvod_pm_set_frame(mv->pm, mv->kp, f->desc, f->n);
-	if (ret)
-		return ret;
-	int np = gather(mv);
 	double R[9], t[3];
 	predict(mv, R, t);
-	int k = track_projection(mv, np, R, t);
-	if (k < vo->p.min_matches)
-		k = refind(vo, np, R, t, res);
+	int np = 0;
+	int k = vo->klt ? track_klt(vo, R, t, &np) : track_orb(vo, R, t, &np, res);
+	if (k < 0)
+		return k;
 	if (k < vo->p.min_matches) {
 		/* Lost: the two-view algorithm takes this frame from the reference. */
 		mvod_mapvo_reset(mv);

@@ -36,6 +36,12 @@ struct mvod_mapvo {
 	struct mvod_map_kp *kp;  /* [cap] */
 	mvod_map_id *cur_pt;     /* [cap] */
 	mvod_map_id *ref_pt;     /* [cap] the same for the reference frame (vo->ref) */
+	/*
+	 * --frontend klt: where each track of the current (reference) frame was first seen on a
+	 * keyframe (keyframe id and keypoint), or kf MVOD_MAP_NONE: a track with no point yet is
+	 * triangulated from there, the widest baseline it has.
+	 */
+	struct mvod_map_obs *cur_first, *ref_first; /* [cap] */
 	/* The map's points gathered for a frame: ids, positions, descriptors, matches. */
 	mvod_map_id *ids; /* [point_cap] */
 	double *pos;      /* [point_cap * 3] */
@@ -59,7 +65,11 @@ struct mvod_mapvo {
 	int kf_tracked;        /* points tracked into the last keyframe (before it triangulated) */
 };
 
-/* For the VO's camera (vo->cam) and feature cap (vo->cap); ORB only (-EINVAL otherwise). */
+/*
+ * For the VO's camera (vo->cam) and feature cap (vo->cap); ORB descriptors only (-EINVAL
+ * otherwise). With the KLT front end (vo->klt) the map's points ride on the tracks: a track
+ * carries the id of the point it observes from frame to frame, and no descriptor is computed.
+ */
 int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out);
 void mvod_mapvo_destroy(struct mvod_mapvo *mv);
 
@@ -82,7 +92,10 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
  */
 int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
 
-/* Mapping (mapping.c): the current frame, tracked at mv->Rcw, tcw, becomes a keyframe. */
+/*
+ * Mapping (mapping.c): the current frame, tracked at mv->Rcw, tcw, becomes a keyframe. With
+ * KLT, its tracks without a point are triangulated from their first keyframe (cur_first).
+ */
 int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added);
 /*
  * Windowed bundle adjustment (mapping_ba.c), the two oldest keyframes held (the gauge:

@@ -188,10 +188,6 @@ int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_ca
 	int ret = mvod_vo_check_frontend(params, err, errlen);
 	if (ret)
 		return ret;
-	if (params->mode == MVOD_VO_MAP && mvod_vo_frontend(params) == MVOD_FRONTEND_KLT)
-		return mvod_errf(err, errlen, -EINVAL, "--mode map matches its points by ORB "
-				 "descriptors, which --frontend klt does not compute for every frame: "
-				 "use --frontend orb or --mode twoview");
 	/* As mvod_cv_preproc_create rounds. */
 	int w = (int)(cam->width * params->resize + 0.5), h = (int)(cam->height * params->resize + 0.5);
 	if (w >= MVOD_VO_MIN_PX && h >= MVOD_VO_MIN_PX)
