@@ -392,8 +392,6 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 	predict(mv, R, t);
 	int np = 0;
 	int k = vo->klt ? track_klt(vo, R, t, &np) : track_orb(vo, R, t, &np, res);
-	if (k < 0)
-		return k;
 	if (k < vo->p.min_matches) {
 		/* Lost: the two-view algorithm takes this frame from the reference. */
 		mvod_mapvo_reset(mv);
