@@ -203,37 +203,38 @@ static void test_static(void **state)
 }
 
 /*
- * Two black frames (10, 11) in a forward run of 20 frames: each has too few features, and
- * tracking is LOST with the first; the pose holds.
+ * Twenty frames forward with frames 10 and 11 black, through mode and frontend: each black
+ * frame has too few features, tracking is LOST with the first, and the pose holds.
  */
-static void run_black_frames(const char *frontend, struct run *r)
+static void run_black(const char *mode, const char *frontend, struct run *r)
 {
 	char dir[300], images[320], src[340];
-	snprintf(dir, sizeof(dir), "%s/black-%s", harness_tmpdir(), frontend);
+	snprintf(dir, sizeof(dir), "%s/black-%s-%s", harness_tmpdir(), mode, frontend);
 	harness_synth(dir, "forward", 20, "png", "--size", "320x240", NULL);
 	snprintf(images, sizeof(images), "%s/images", dir);
 	harness_blacken(images, 10, 320, 240);
 	harness_blacken(images, 11, 320, 240);
 	snprintf(src, sizeof(src), "images:%s", images);
-	run_with(dir, src, "twoview", frontend, r);
+	run_with(dir, src, mode, frontend, r);
 	poses_match_trajectory(r, 20);
-	expect_tracking(r, expect_start(r) + 1, 10);
 	for (int i = 10; i < 12; i++) {
 		expect_pose(r, i, MVOD_POSE_T_FRAME_FEW_FEATURES, MVOD_POSE_T_STATE_LOST,
 			    MVOD_POSE_T_SCALE_NONE);
-		assert_memory_equal(r->pose[i].position, r->pose[9].position, sizeof(r->pose[9].position));
+		assert_memory_equal(r->pose[i].position, r->pose[9].position,
+				    sizeof(r->pose[9].position));
 	}
 }
 
 /*
- * The descriptor front end: frame 12 matches against frame 9, the reference kept through the
- * loss, by descriptor: TRACKING again at once.
+ * Two black frames in a forward run (run_black). Frame 12 matches against frame 9, the
+ * reference kept through the loss: TRACKING again at once.
  */
 static void test_black_frames_lost_and_back(void **state)
 {
 	(void)state;
 	struct run r;
-	run_black_frames("orb", &r);
+	run_black("twoview", "orb", &r);
+	expect_tracking(&r, expect_start(&r) + 1, 10);
 	assert_int_equal(r.pose[12].frame_status, MVOD_POSE_T_FRAME_MOTION);
 	assert_int_equal(r.pose[12].state, MVOD_POSE_T_STATE_TRACKING);
 	expect_tracking(&r, 13, 20);
@@ -251,7 +252,8 @@ static void test_black_frames_klt_back(void **state)
 {
 	(void)state;
 	struct run r;
-	run_black_frames("auto", &r);
+	run_black("twoview", "auto", &r);
+	expect_tracking(&r, expect_start(&r) + 1, 10);
 	int back = 12;
 	while (back < 14 && r.pose[back].state != MVOD_POSE_T_STATE_TRACKING) {
 		assert_int_equal(r.pose[back].state, MVOD_POSE_T_STATE_LOST);
@@ -351,28 +353,15 @@ static void test_map_klt_rotate(void **state)
 }
 
 /*
- * Map mode with KLT through two black frames (10, 11): each has too few features (LOST, the
- * pose held at frame 9's); the tracks are gone after them, so the map is rebuilt from new
- * ones, carrying the last speed: TRACKING again (measured at frame 14) well before frame 19.
+ * Map mode with KLT through two black frames (run_black: LOST, the pose held at frame 9's);
+ * the tracks are gone after them, so the map is rebuilt from new ones, carrying the last
+ * speed: TRACKING again (measured at frame 14) well before frame 19.
  */
 static void test_map_klt_black(void **state)
 {
 	(void)state;
-	char dir[300], images[320], src[340];
-	snprintf(dir, sizeof(dir), "%s/black-klt", harness_tmpdir());
-	harness_synth(dir, "forward", 20, "png", "--size", "320x240", NULL);
-	snprintf(images, sizeof(images), "%s/images", dir);
-	harness_blacken(images, 10, 320, 240);
-	harness_blacken(images, 11, 320, 240);
-	snprintf(src, sizeof(src), "images:%s", images);
 	struct run r;
-	run_with(dir, src, "map", "klt", &r);
-	poses_match_trajectory(&r, 20);
-	for (int i = 10; i < 12; i++) {
-		expect_pose(&r, i, MVOD_POSE_T_FRAME_FEW_FEATURES, MVOD_POSE_T_STATE_LOST,
-			    MVOD_POSE_T_SCALE_NONE);
-		assert_memory_equal(r.pose[i].position, r.pose[9].position, sizeof(r.pose[9].position));
-	}
+	run_black("map", "klt", &r);
 	expect_pose(&r, 19, MVOD_POSE_T_FRAME_MOTION, MVOD_POSE_T_STATE_TRACKING,
 		    MVOD_POSE_T_SCALE_MAP);
 	state_changes_published(&r);
