@@ -16,8 +16,10 @@
 #include "ipc/lcm_log.h"
 #include "mvod/ipc.h"
 #include "mvod/pipeline.h"
+#include "mvod/speed.h"
 #include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
+#include "mvod_speed_t.h"
 #include "mvod_status2_t.h"
 #include "mvod_status_t.h"
 
@@ -386,6 +388,48 @@ static void test_file_log(void **state)
 	tmplog_fini(&t);
 }
 
+/*
+ * --speed-url file://: the odometer between two samples is interpolated, beyond the last one
+ * extrapolated at its speed for up to MVOD_SPEED_STALE_US, and in a gap longer than that on
+ * both sides there is none. Exact: distances and times are binary fractions.
+ */
+static void test_speed_log(void **state)
+{
+	(void)state;
+	struct tmplog t;
+	tmplog_init(&t);
+	struct mvod_lcm_log *log;
+	assert_int_equal(mvod_lcm_log_open("speed log", t.path, 256, &log, NULL, 0), 0);
+	/* 1 m/s: 1 m at 1 s, then nothing for 2 s, then 3.5 m at 3 s. */
+	static const mvod_speed_t samples[] = {{0, 1.0, 1, 0.0}, {1000000, 1.0, 1, 1.0},
+					       {3000000, 1.0, 1, 3.5}};
+	for (int i = 0; i < 3; i++) {
+		uint8_t buf[64];
+		int len = mvod_speed_t_encode(buf, 0, sizeof(buf), &samples[i]);
+		assert_true(len > 0);
+		assert_int_equal(mvod_lcm_log_write(log, "MVOD_SPEED", buf, (size_t)len), 0);
+	}
+	assert_int_equal(mvod_lcm_log_close(log), 0);
+	char url[160];
+	snprintf(url, sizeof(url), "file://%s?mode=r", t.path);
+	struct mvod_speed *s;
+	assert_int_equal(mvod_speed_create(url, NULL, &s, NULL, 0), 0);
+	double m = -1;
+	assert_int_equal(mvod_speed_odometer(s, 250000, &m), 0);
+	assert_true(m == 0.25);
+	/* Between 1 s and 3 s, 0.25 s from one of them: 1 + 2.5 m * 0.25 / 2. */
+	assert_int_equal(mvod_speed_odometer(s, 1250000, &m), 0);
+	assert_true(m == 1.3125);
+	assert_int_equal(mvod_speed_odometer(s, 2000000, &m), -EAGAIN); /* 1 s from both */
+	assert_int_equal(mvod_speed_odometer(s, 2750000, &m), 0);
+	assert_true(m == 3.1875);
+	assert_int_equal(mvod_speed_odometer(s, 3250000, &m), 0);
+	assert_true(m == 3.75);
+	assert_int_equal(mvod_speed_odometer(s, 3750000, &m), -EAGAIN);
+	mvod_speed_destroy(s);
+	tmplog_fini(&t);
+}
+
 /* A NULL url goes to LCM_DEFAULT_URL; pointed at a log file, nothing touches the network. */
 static void test_default_url_from_env(void **state)
 {
@@ -569,6 +613,7 @@ int main(void)
 		cmocka_unit_test(test_file_log_write_error),
 		cmocka_unit_test(test_send_seam),
 		cmocka_unit_test(test_log_urls),
+		cmocka_unit_test(test_speed_log),
 		cmocka_unit_test(test_upgrade),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
