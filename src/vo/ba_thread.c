@@ -79,15 +79,23 @@ int mvod_ba_thread_create(int kf_cap, int point_cap, struct mvod_ba_thread **out
 	return 0;
 }
 
+/* Tells the BA thread: a job is posted (post) or it is to end (stop, after any job). */
+static void tell(struct mvod_ba_thread *t, bool post, bool stop)
+{
+	pthread_mutex_lock(&t->lock);
+	if (post)
+		t->state = JOB_POSTED;
+	t->stop = stop;
+	pthread_cond_broadcast(&t->changed);
+	pthread_mutex_unlock(&t->lock);
+}
+
 void mvod_ba_thread_destroy(struct mvod_ba_thread *t)
 {
 	if (!t)
 		return;
 	if (t->started) {
-		pthread_mutex_lock(&t->lock);
-		t->stop = true;
-		pthread_cond_broadcast(&t->changed);
-		pthread_mutex_unlock(&t->lock);
+		tell(t, false, true);
 		pthread_join(t->thread, NULL);
 	}
 	pthread_cond_destroy(&t->changed);
@@ -111,10 +119,7 @@ struct mvod_ba_job *mvod_ba_thread_job(struct mvod_ba_thread *t)
 
 void mvod_ba_thread_post(struct mvod_ba_thread *t)
 {
-	pthread_mutex_lock(&t->lock);
-	t->state = JOB_POSTED;
-	pthread_cond_broadcast(&t->changed);
-	pthread_mutex_unlock(&t->lock);
+	tell(t, true, false);
 }
 
 bool mvod_ba_thread_take(struct mvod_ba_thread *t, bool wait, struct mvod_ba_job **out)
