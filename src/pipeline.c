@@ -196,9 +196,12 @@ static int check_output_frame(struct run *r)
 static int open_scale(struct run *r)
 {
 	const struct mvod_run_opts *o = r->o;
-	if (o->vo.scale_mode == MVOD_SCALE_MODE_HEIGHT && !(o->vo.camera_height_m > 0)) {
+	if (o->vo.scale_mode == MVOD_SCALE_MODE_HEIGHT && !(o->vo.camera_height_m > 0) &&
+	    !r->cam.has_mount) {
 		LOG(ERROR, "--scale height needs the camera's height above the ground: pass "
-			   "--camera-height M (metres) or set [vo] camera-height in the --config file");
+			   "--camera-height M (metres), set [vo] camera-height in the --config file, "
+			   "or give a --calib file with a \"mount\" block (height_m, pitch_deg, "
+			   "roll_deg)");
 		return -EINVAL;
 	}
 	if (o->vo.scale_mode != MVOD_SCALE_MODE_EXTERNAL)

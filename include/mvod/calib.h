@@ -31,6 +31,14 @@ struct mvod_camera {
 	 */
 	bool has_focus;
 	double focus;
+	/*
+	 * How the camera is mounted above the ground ("mount" in mvod JSON), when known:
+	 * --scale height takes its height (metres) when --camera-height is not given, and its
+	 * pitch (degrees, positive looking down) and roll (degrees, positive: the ground's normal
+	 * leans towards +x) as the ground normal's first estimate.
+	 */
+	bool has_mount;
+	double mount_height_m, mount_pitch_deg, mount_roll_deg;
 };
 
 /*

@@ -122,6 +122,37 @@ static cJSON *json_parse(const char *text, char *err, size_t errlen)
 	return root;
 }
 
+/* Largest mount height taken, metres: above any robot or car; the same bound as --camera-height. */
+#define MOUNT_MAX_HEIGHT_M 20.0
+/* Largest |pitch| and |roll|, degrees: beyond it the ground is out of a forward camera's view. */
+#define MOUNT_MAX_ANGLE_DEG 60.0
+
+/* The optional "mount" block: {"height_m": H, "pitch_deg": P, "roll_deg": R}. */
+static int json_mount(const cJSON *root, struct mvod_camera *c, char *err, size_t errlen)
+{
+	const cJSON *m = cJSON_GetObjectItemCaseSensitive(root, "mount");
+	if (!m || cJSON_IsNull(m))
+		return 0;
+	const cJSON *h = cJSON_GetObjectItemCaseSensitive(m, "height_m");
+	const cJSON *p = cJSON_GetObjectItemCaseSensitive(m, "pitch_deg");
+	const cJSON *r = cJSON_GetObjectItemCaseSensitive(m, "roll_deg");
+	if (!cJSON_IsObject(m) || !cJSON_IsNumber(h) || !(h->valuedouble > 0) ||
+	    !(h->valuedouble <= MOUNT_MAX_HEIGHT_M) || (p && !cJSON_IsNumber(p)) ||
+	    (r && !cJSON_IsNumber(r)) ||
+	    (p && !(fabs(p->valuedouble) <= MOUNT_MAX_ANGLE_DEG)) ||
+	    (r && !(fabs(r->valuedouble) <= MOUNT_MAX_ANGLE_DEG)))
+		return mvod_errf(err, errlen, -EINVAL,
+				 "\"mount\" must be {\"height_m\": metres above the ground, in (0, %g], "
+				 "\"pitch_deg\": degrees down, \"roll_deg\": degrees, each within "
+				 "+-%g}: measure it again with mvod calibrate or remove it",
+				 MOUNT_MAX_HEIGHT_M, MOUNT_MAX_ANGLE_DEG);
+	c->has_mount = true;
+	c->mount_height_m = h->valuedouble;
+	c->mount_pitch_deg = p ? p->valuedouble : 0.0;
+	c->mount_roll_deg = r ? r->valuedouble : 0.0;
+	return 0;
+}
+
 static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, size_t errlen)
 {
 	struct mvod_camera c = {0};
@@ -170,7 +201,9 @@ static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, si
 		c.has_focus = true;
 		c.focus = focus->valuedouble;
 	}
-	*cam = c;
+	ret = json_mount(root, &c, err, errlen);
+	if (!ret)
+		*cam = c;
 out:
 	return ret;
 }
@@ -401,6 +434,12 @@ static cJSON *calib_to_json(const struct mvod_camera *cam, const struct mvod_cal
 	cJSON_AddItemToObject(root, "distortion", number_row(cam->dist, cam->n_dist));
 	if (cam->has_focus)
 		cJSON_AddNumberToObject(root, "focus", cam->focus);
+	if (cam->has_mount) {
+		cJSON *m = cJSON_AddObjectToObject(root, "mount");
+		cJSON_AddNumberToObject(m, "height_m", cam->mount_height_m);
+		cJSON_AddNumberToObject(m, "pitch_deg", cam->mount_pitch_deg);
+		cJSON_AddNumberToObject(m, "roll_deg", cam->mount_roll_deg);
+	}
 	char when[32];
 	time_t now = time(NULL);
 	struct tm tm;

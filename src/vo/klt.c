@@ -252,6 +252,17 @@ static void mark_tracks(struct mvod_klt *k)
 	k->n = m;
 }
 
+/* Track j starts at corner c, with no flow yet and no match in the reference. */
+static void start_track(struct mvod_klt *k, int j, const struct corner *c)
+{
+	k->pos[2 * j] = c->x;
+	k->pos[2 * j + 1] = c->y;
+	k->vel[2 * j] = k->vel[2 * j + 1] = 0;
+	k->err[j] = 0;
+	k->score[j] = c->score;
+	k->ref[j] = -1;
+}
+
 /* New tracks from the ranked corners, strongest first, in free cells; quota: per bucket, or 0. */
 static void add_corners(struct mvod_klt *k, int nc, int quota)
 {
@@ -262,13 +273,7 @@ static void add_corners(struct mvod_klt *k, int nc, int quota)
 			continue;
 		k->occ[o] = 1;
 		k->bucket[b]++;
-		int j = k->n++;
-		k->pos[2 * j] = c->x;
-		k->pos[2 * j + 1] = c->y;
-		k->vel[2 * j] = k->vel[2 * j + 1] = 0;
-		k->err[j] = 0;
-		k->score[j] = c->score;
-		k->ref[j] = -1;
+		start_track(k, k->n++, c);
 	}
 }
 
@@ -323,7 +328,7 @@ int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvo
 	return 0;
 }
 
-/* Ranked FAST corners of the rows quad spans, inside it; their count. */
+/* FAST corners of the rows quad spans that lie inside it, ranked into k->corners, *nc of them. */
 static int band_corners(struct mvod_klt *k, const struct mvod_image *grey, const float quad[8],
 			int threshold, int *nc)
 {
@@ -383,12 +388,7 @@ int mvod_klt_reserve(struct mvod_klt *k, const struct mvod_image *grey, const fl
 		if ((j = band_slot(k, quad, &victim)) < 0)
 			break;
 		k->occ[o] = 1;
-		k->pos[2 * j] = c->x;
-		k->pos[2 * j + 1] = c->y;
-		k->vel[2 * j] = k->vel[2 * j + 1] = 0;
-		k->err[j] = 0;
-		k->score[j] = c->score;
-		k->ref[j] = -1;
+		start_track(k, j, c);
 		f->kp[j] = (struct mvod_keypoint){c->x, c->y, 0, c->score};
 		n_added++;
 	}

@@ -173,6 +173,14 @@ void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g)
 		prior[k] /= len;
 }
 
+void mvod_ground_normal(double pitch_deg, double roll_deg, double n[3])
+{
+	double p = pitch_deg * M_PI / 180, r = roll_deg * M_PI / 180;
+	n[0] = cos(p) * sin(r);
+	n[1] = cos(p) * cos(r);
+	n[2] = sin(p);
+}
+
 void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate)
 {
 	*f = (struct mvod_scale_filter){.gain = gain, .gate = gate, .since = -1,

@@ -39,6 +39,11 @@ int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inlie
 #define MVOD_GROUND_NORMAL_GAIN 0.1
 #define MVOD_GROUND_MAX_TURN_DEG 5.0
 void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g);
+/*
+ * The ground's normal in the camera frame (unit, pointing down) of a camera mounted with
+ * pitch_deg (positive looking down: n = (cos p sin r, cos p cos r, sin p)) and roll_deg.
+ */
+void mvod_ground_normal(double pitch_deg, double roll_deg, double n[3]);
 
 /*
  * The road band: the part of the ground where a car's own lane lies, where the height is

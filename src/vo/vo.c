@@ -222,6 +222,19 @@ static int klt_create(struct mvod_vo *vo)
 	return mvod_klt_create(&kp, vo->cam.width, vo->cam.height, &vo->klt);
 }
 
+/*
+ * --scale height: the camera file's mount gives the height when no --camera-height does, and
+ * the ground normal's first estimate (the fit searches +-4 deg about it).
+ */
+static void mount(struct mvod_vo *vo, const struct mvod_camera *cam)
+{
+	if (vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT || !cam->has_mount)
+		return;
+	if (!(vo->p.camera_height_m > 0))
+		vo->p.camera_height_m = cam->mount_height_m;
+	mvod_ground_normal(cam->mount_pitch_deg, cam->mount_roll_deg, vo->scale.ground_n);
+}
+
 int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		   struct mvod_vo **out)
 {
@@ -258,6 +271,7 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 		mvod_scale_filter_init(&vo->scale, 1.0, INFINITY);
 	else
 		mvod_scale_filter_init(&vo->scale, HEIGHT_GAIN, HEIGHT_GATE);
+	mount(vo, cam);
 	*out = vo;
 	return 0;
 fail:

@@ -212,17 +212,24 @@ static struct mvod_vo_result feed(struct mvod_vo *vo, double z, int first, int c
 	return res;
 }
 
-static struct mvod_vo *make_vo(enum mvod_scale_mode mode)
+/* A VO on camera c, with the ground's height given by --camera-height (height_m > 0) or not. */
+static struct mvod_vo *make_vo_on(enum mvod_scale_mode mode, const struct mvod_camera *c,
+				  double height_m)
 {
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
 	/* The seam below the detector takes keypoints with descriptors: the descriptor front end. */
 	p.frontend = MVOD_FRONTEND_ORB;
 	p.scale_mode = mode;
-	p.camera_height_m = GROUND_Y;
+	p.camera_height_m = height_m;
 	struct mvod_vo *vo = NULL;
-	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
+	assert_int_equal(mvod_vo_create(&p, c, &vo), 0);
 	return vo;
+}
+
+static struct mvod_vo *make_vo(enum mvod_scale_mode mode)
+{
+	return make_vo_on(mode, &cam, GROUND_Y);
 }
 
 /*
@@ -279,6 +286,32 @@ static void test_height_without_ground(void **state)
 }
 
 /*
+ * No --camera-height: the camera file's mount gives it. Its pitch, 1.5 deg off the level
+ * ground's, is only the normal's first estimate: the fit's pitch search (+-4 deg in 0.5 deg
+ * steps) finds the level ground, so the step is exact as with the flag (0.1 %, float pixels).
+ * A --camera-height given wins over the mount: 0.8 of the ground's height makes steps 0.8
+ * times as long.
+ */
+static void test_height_from_mount(void **state)
+{
+	(void)state;
+	struct mvod_camera mounted = cam;
+	mounted.has_mount = true;
+	mounted.mount_height_m = GROUND_Y;
+	mounted.mount_pitch_deg = 1.5;
+	for (int flag = 0; flag < 2; flag++) {
+		double expect = flag ? 0.8 * 0.8 : 0.8;
+		struct mvod_vo *vo =
+			make_vo_on(MVOD_SCALE_MODE_HEIGHT, &mounted, flag ? 0.8 * GROUND_Y : 0);
+		feed(vo, 0, 0, POINTS);
+		struct mvod_vo_result res = feed(vo, 0.8, 0, POINTS);
+		assert_int_equal(res.scale_source, MVOD_SCALE_HEIGHT);
+		assert_true(fabs(res.step_m - expect) < 1e-3 * expect);
+		mvod_vo_destroy(vo);
+	}
+}
+
+/*
  * --scale external: each step is the odometer's difference exactly; with the odometer
  * unknown (stale speed) structure carries the last scale on.
  */
@@ -320,6 +353,7 @@ int main(void)
 		cmocka_unit_test(test_filter),
 		cmocka_unit_test(test_height_metric_from_first_step),
 		cmocka_unit_test(test_height_without_ground),
+		cmocka_unit_test(test_height_from_mount),
 		cmocka_unit_test(test_external_odometer),
 	};
 	return cmocka_run_group_tests(tests, setup_world, NULL);
