@@ -144,7 +144,7 @@ static int json_mount(const cJSON *root, struct mvod_camera *c, char *err, size_
 		return mvod_errf(err, errlen, -EINVAL,
 				 "\"mount\" must be {\"height_m\": metres above the ground, in (0, %g], "
 				 "\"pitch_deg\": degrees down, \"roll_deg\": degrees, each within "
-				 "+-%g}: measure it again with mvod calibrate or remove it",
+				 "+-%g}: correct it or remove it",
 				 MOUNT_MAX_HEIGHT_M, MOUNT_MAX_ANGLE_DEG);
 	c->has_mount = true;
 	c->mount_height_m = h->valuedouble;
