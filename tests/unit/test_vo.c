@@ -378,8 +378,8 @@ static void test_seam_refuses_bad_features(void **state)
 }
 
 /*
- * --frontend auto: klt in two-view mode with the descriptor options at their defaults; orb in
- * map mode and as soon as any one of the five descriptor options differs; an explicit choice
+ * --frontend auto: klt in either mode with the descriptor options at their defaults; orb as
+ * soon as any one of the five descriptor options differs; an explicit choice
  * stays. --frontend klt with a descriptor option is refused naming both.
  */
 static void test_frontend_auto(void **state)
@@ -392,7 +392,7 @@ static void test_frontend_auto(void **state)
 	assert_null(mvod_vo_descriptor_option(&d));
 	p = d;
 	p.mode = MVOD_VO_MAP;
-	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
+	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
 	for (int i = 0; mvod_vo_descriptor_flags[i]; i++) {
 		p = d;
 		switch (i) {
