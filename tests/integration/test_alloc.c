@@ -339,6 +339,13 @@ static void test_map_loop_allocates_nothing_of_its_own(void **state)
 	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_ORB, MVOD_VO_MAP);
 }
 
+/* Map mode on KLT tracks (auto's choice): the point ids ride in the tracks' fixed arrays. */
+static void test_map_klt_loop_allocates_nothing_of_its_own(void **state)
+{
+	(void)state;
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT, MVOD_VO_MAP);
+}
+
 /* The KLT front end's tracks, corners and pyramids live in buffers made at create. */
 static void test_klt_loop_allocates_nothing_of_its_own(void **state)
 {
@@ -381,6 +388,7 @@ int main(void)
 		cmocka_unit_test(test_loop_allocates_nothing_of_its_own),
 		cmocka_unit_test(test_klt_loop_allocates_nothing_of_its_own),
 		cmocka_unit_test(test_map_loop_allocates_nothing_of_its_own),
+		cmocka_unit_test(test_map_klt_loop_allocates_nothing_of_its_own),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
