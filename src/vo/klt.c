@@ -358,7 +358,7 @@ static int band_corners(struct mvod_klt *k, const struct mvod_image *grey, const
 	struct mvod_image rows = *grey;
 	rows.data = grey->data + (size_t)top * (size_t)grey->stride;
 	rows.h = bottom - top;
-	int nf, ret = mvod_klt_cv_fast_image(k->cv, &rows, threshold, k->fast_xy, &nf);
+	int nf, ret = mvod_klt_cv_fast(k->cv, &rows, threshold, k->fast_xy, &nf);
 	for (int i = 0; i < nf && !ret; i++) {
 		float x = k->fast_xy[2 * i], y = k->fast_xy[2 * i + 1] + (float)top;
 		float s = inside(k, x, y) && mvod_quad_contains(quad, x, y) ? harris(grey, (int)x, (int)y)

@@ -88,11 +88,13 @@ extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float
 	});
 }
 
-/* FAST on img into xy (the first fast_cap corners OpenCV found). */
-static int fast_into(struct mvod_klt_cv *k, const cv::Mat &img, int threshold, float *xy, int *n)
+extern "C" int mvod_klt_cv_fast(struct mvod_klt_cv *k, int level, int threshold, float *xy, int *n)
 {
+	if (k->have < 1 || level < 0 || level > k->levels)
+		return -EINVAL;
 	return mvod_guarded([&] {
-		cv::FAST(img, k->corners, threshold, true);
+		/* Built with derivatives, the pyramid holds image, derivatives, image, ... */
+		cv::FAST(k->newest[(size_t)(2 * level)], k->corners, threshold, true);
 		int m = std::min((int)k->corners.size(), k->fast_cap);
 		for (int i = 0; i < m; i++) {
 			xy[2 * i] = k->corners[(size_t)i].pt.x;
@@ -101,20 +103,4 @@ static int fast_into(struct mvod_klt_cv *k, const cv::Mat &img, int threshold, f
 		*n = m;
 		return 0;
 	});
-}
-
-extern "C" int mvod_klt_cv_fast(struct mvod_klt_cv *k, int level, int threshold, float *xy, int *n)
-{
-	if (k->have < 1 || level < 0 || level > k->levels)
-		return -EINVAL;
-	/* Built with derivatives, the pyramid holds image, derivatives, image, ... */
-	return fast_into(k, k->newest[(size_t)(2 * level)], threshold, xy, n);
-}
-
-extern "C" int mvod_klt_cv_fast_image(struct mvod_klt_cv *k, const struct mvod_image *grey,
-				      int threshold, float *xy, int *n)
-{
-	if (grey->fmt != MVOD_PIX_GREY)
-		return -EINVAL;
-	return fast_into(k, view(grey), threshold, xy, n);
 }

@@ -42,9 +42,6 @@ int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float *from, flo
  * *n their count (the first fast_cap OpenCV found).
  */
 int mvod_klt_cv_fast(struct mvod_klt_cv *k, int level, int threshold, float *xy, int *n);
-/* The same on a grey image of its own (a band of rows: --scale height's road band). */
-int mvod_klt_cv_fast_image(struct mvod_klt_cv *k, const struct mvod_image *grey, int threshold,
-			   float *xy, int *n);
 
 #ifdef __cplusplus
 }
