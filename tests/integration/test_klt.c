@@ -148,11 +148,11 @@ static void test_tracks_match_exact_correspondences(void **state)
 			      "1 px\n", k, t.nm, t.n0, err[t.nm / 2], err[t.nm * 95 / 100], off);
 		/*
 		 * The first step has no motion prediction to start from and 31 px of flow; each
-		 * step loses the points that leave the view. Measured 310, 288, 266 of 500.
+		 * step loses the points that leave the view. Measured 287, 243, 212 of 500.
 		 */
 		assert_true(t.nm > t.n0 / 3);
-		assert_true(err[t.nm / 2] < 0.25);         /* measured 0.060, 0.091, 0.123 */
-		assert_true(err[t.nm * 95 / 100] < 0.8);  /* 0.158, 0.250, 0.379 */
+		assert_true(err[t.nm / 2] < 0.25);         /* measured 0.056, 0.092, 0.111 */
+		assert_true(err[t.nm * 95 / 100] < 0.8);  /* 0.172, 0.257, 0.388 */
 		/* A repeated texture can fool forward and back alike: 2, 0, 0 measured. */
 		assert_true(off <= t.nm / 50);
 	}
