@@ -29,15 +29,6 @@
 #define ITERATIONS 10
 #define EPS_PX 0.03
 /*
- * FAST runs on this pyramid level (1: half resolution, a quarter of the pixels), the corners
- * scaled back to level 0 and ranked there by their Harris score. On KITTI 06 (callgrind,
- * 20 frames, FAST runs on every frame as a tenth to a third of the tracks fail each step)
- * it cuts 10 x 10^6 instructions per frame; err_avg 06 0.087 -> 0.073, 07 0.047 -> 0.047,
- * and mvod-synth's rotate-in-place keeps as many tracks (310, 288, 266 of 500 after 1-3
- * frames, against 287, 243, 212 at level 0).
- */
-#define FAST_LEVEL 1
-/*
  * Corners and tracks stay this many pixels inside the image: the Harris score's 7x7 window
  * and its central differences reach 4 pixels out.
  */
@@ -294,22 +285,18 @@ static void add_corners(struct mvod_klt *k, int nc, int quota)
 static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 {
 	int nf;
-	int ret = mvod_klt_cv_fast(k->cv, FAST_LEVEL, k->p.fast_threshold, k->fast_xy, &nf);
+	int ret = mvod_klt_cv_fast(k->cv, grey, k->p.fast_threshold, k->fast_xy, &nf);
 	if (ret)
 		return ret;
-	mark_tracks(k);
 	int nc = 0;
 	for (int i = 0; i < nf; i++) {
-		/* pyrDown centres pixel (u, v) of level 1 on (2u, 2v) of level 0 */
-		float x = k->fast_xy[2 * i] * (1 << FAST_LEVEL);
-		float y = k->fast_xy[2 * i + 1] * (1 << FAST_LEVEL);
-		if (!inside(k, x, y) || k->occ[occ_index(k, x, y)])
-			continue; /* a track holds the cell: no need to rank the corner */
-		float s = harris(grey, (int)x, (int)y);
+		float x = k->fast_xy[2 * i], y = k->fast_xy[2 * i + 1];
+		float s = inside(k, x, y) ? harris(grey, (int)x, (int)y) : 0;
 		if (s > 0) /* not an edge or a flat patch */
 			k->corners[nc++] = (struct corner){x, y, s};
 	}
 	sort_by_score(k->corners, nc);
+	mark_tracks(k);
 	int cells = BUCKETS_X * BUCKETS_Y;
 	add_corners(k, nc, (k->p.max_tracks + cells - 1) / cells);
 	add_corners(k, nc, 0);

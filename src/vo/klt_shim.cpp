@@ -88,13 +88,13 @@ extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float
 	});
 }
 
-extern "C" int mvod_klt_cv_fast(struct mvod_klt_cv *k, int level, int threshold, float *xy, int *n)
+extern "C" int mvod_klt_cv_fast(struct mvod_klt_cv *k, const struct mvod_image *grey, int threshold,
+				float *xy, int *n)
 {
-	if (k->have < 1 || level < 0 || level > k->levels)
+	if (grey->fmt != MVOD_PIX_GREY)
 		return -EINVAL;
 	return mvod_guarded([&] {
-		/* Built with derivatives, the pyramid holds image, derivatives, image, ... */
-		cv::FAST(k->newest[(size_t)(2 * level)], k->corners, threshold, true);
+		cv::FAST(view(grey), k->corners, threshold, true);
 		int m = std::min((int)k->corners.size(), k->fast_cap);
 		for (int i = 0; i < m; i++) {
 			xy[2 * i] = k->corners[(size_t)i].pt.x;

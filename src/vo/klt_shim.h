@@ -37,11 +37,11 @@ int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float *from, flo
 		     uint8_t *ok);
 
 /*
- * FAST corners (non-maximum suppressed) above threshold grey levels on level (0: full
- * resolution) of the newest pyramid: xy[2 * fast_cap] receives pixel positions on that level,
- * *n their count (the first fast_cap OpenCV found).
+ * FAST corners (non-maximum suppressed) of grey above threshold grey levels: xy[2 * fast_cap]
+ * receives pixel positions, *n their count (the first fast_cap OpenCV found).
  */
-int mvod_klt_cv_fast(struct mvod_klt_cv *k, int level, int threshold, float *xy, int *n);
+int mvod_klt_cv_fast(struct mvod_klt_cv *k, const struct mvod_image *grey, int threshold,
+		     float *xy, int *n);
 
 #ifdef __cplusplus
 }
