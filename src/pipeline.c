@@ -252,7 +252,15 @@ static int open_inputs(struct run *r)
 	r->sum->frontend = mvod_vo_frontend(&o->vo);
 	LOG(INFO, "front end: %s%s", mvod_frontend_names[r->sum->frontend],
 	    o->vo.frontend == MVOD_FRONTEND_AUTO ? " (--frontend auto)" : "");
-	ret = mvod_vo_create(&o->vo, &r->cam, &r->vo);
+	/*
+	 * A file or dataset is read as fast as it is processed, so waiting for bundle adjustment
+	 * costs no frame, and its result is then the same on every machine; on a live camera the
+	 * wait would hold frames back, so only --ba-sync asks for it there. Measured (quiet run,
+	 * KITTI 07, map mode on ORB): drift 3.80 without the wait, 1.38 with it.
+	 */
+	struct mvod_vo_params vp = o->vo;
+	vp.ba_sync = vp.ba_sync || !r->info.live;
+	ret = mvod_vo_create(&vp, &r->cam, &r->vo);
 	if (ret)
 		LOG(ERROR, "cannot set up visual odometry for %dx%d: %s", r->cam.width,
 		    r->cam.height, strerror(-ret));
