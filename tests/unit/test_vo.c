@@ -451,6 +451,127 @@ static void test_quality(void **state)
 	}
 }
 
+
+/* Map mode (descriptor path: the seam feeds features below the detector), bundle adjustment
+ * waited for so each frame's outcome is fixed. */
+static struct mvod_vo *make_map_vo(void)
+{
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	p.mode = MVOD_VO_MAP;
+	p.frontend = MVOD_FRONTEND_ORB;
+	p.ba_sync = true;
+	struct mvod_vo *vo = NULL;
+	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
+	return vo;
+}
+
+/* Map test's camera at frame i: 1 cm a frame for frames 0-2, then 25 cm a frame, forward. */
+static struct mvod_pose map_pose(int i)
+{
+	double z = i < 3 ? 0.01 * i : 0.02 + 0.25 * (i - 2);
+	return at(0.02 * z, 0, z, 0);
+}
+
+/*
+ * The pose never jumps: a step at most k times the true displacement since the last pose
+ * that moved (held frames accumulate), in map units (s per metre). k = 1.01: on exact
+ * projections rounded to float pixels the map's step is the true one to 1e-6 (measured worst
+ * ratio 1.000001, printed), so 1 % is all margin; a pose that jumps (a wrong PnP, a new map at
+ * unit length: 3 true steps here) is off by tens of percent or more.
+ */
+static void assert_no_jump(const struct mvod_vo_result *r, const struct mvod_pose *moved, int i,
+			   double s, double *worst)
+{
+	struct mvod_pose p = map_pose(i);
+	double ratio = r->step_m / (s * mvod_vec3_dist(p.t, moved->t));
+	*worst = fmax(*worst, ratio);
+	assert_true(ratio <= 1.01);
+}
+
+/* Frames from, .., to - 1 tracked against the map, none jumping; the last one's result. */
+static struct mvod_vo_result map_tracks(struct mvod_vo *vo, int from, int to,
+					struct mvod_pose *moved, double s, double *worst)
+{
+	struct mvod_vo_result r = {0};
+	for (int i = from; i < to; i++) {
+		struct mvod_pose p = map_pose(i);
+		r = feed(vo, &p);
+		assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+		assert_int_equal(r.scale_source, MVOD_SCALE_MAP);
+		assert_true(r.map_points > 0 && r.keyframes >= 2);
+		assert_no_jump(&r, moved, i, s, worst);
+		*moved = p;
+	}
+	return r;
+}
+
+/* Frame 30 of the map test with every descriptor bit flipped: it matches nothing. */
+static struct mvod_vo_result feed_unmatchable(struct mvod_vo *vo)
+{
+	static struct view v;
+	struct mvod_pose p = map_pose(30);
+	project(&v, &p);
+	for (int a = 0; a < v.f.n * MVOD_ORB_DESC_BYTES; a++)
+		v.d[a] ^= 0xff;
+	return feed_view(vo, &v);
+}
+
+/*
+ * Map mode's states on exact projections of a forward drive: INITIALIZING (rotation only, the
+ * reference kept) until the pair 0-5 has parallax (frames 3, 4 measured below min_parallax_px);
+ * frame 5 builds the map (unit step, keyframe, points) and tracking goes on against it (scale
+ * source MAP). Frames 20-22 with 20 features: LOST, pose and map held, and frame 23 is tracked
+ * against the kept map, catching up the 4 steps travelled. Frame 30's descriptors match
+ * nothing: the map is dropped (INITIALIZING, pose held); the re-initialised two-view chain's
+ * first step (frame 32: frame 31 is matched against frame 30) carries the last speed.
+ */
+static void test_map_states(void **state)
+{
+	struct mvod_vo *vo = make_map_vo();
+	struct mvod_vo_result r;
+	for (int i = 0; i < 5; i++) {
+		struct mvod_pose p = map_pose(i);
+		r = feed(vo, &p);
+		assert_frame(&r, i ? MVOD_FRAME_ROTATION : MVOD_FRAME_FIRST,
+			     MVOD_STATE_INITIALIZING);
+		assert_true(mvod_vec3_norm(r.pose.t) == 0 && r.map_points == 0);
+	}
+	struct mvod_pose moved = map_pose(5);
+	r = feed(vo, &moved);
+	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+	assert_int_equal(r.scale_source, MVOD_SCALE_UNIT);
+	assert_true(r.keyframe && r.keyframes == 2 && r.map_points >= 100);
+	const double s = 1 / mvod_vec3_norm(moved.t); /* map units per metre */
+	double worst = 0;
+	struct mvod_vo_result last = map_tracks(vo, 6, 20, &moved, s, &worst);
+	for (int i = 20; i < 23; i++) {
+		struct mvod_pose p = map_pose(i);
+		r = feed_range(vo, &p, 0, 20);
+		assert_frame(&r, MVOD_FRAME_FEW_FEATURES, MVOD_STATE_LOST);
+		assert_pose_equal(&r.pose, &last.pose);
+		assert_int_equal(r.map_points, last.map_points);
+	}
+	last = map_tracks(vo, 23, 30, &moved, s, &worst);
+	r = feed_unmatchable(vo);
+	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_INITIALIZING);
+	assert_int_equal(r.map_points, 0);
+	assert_pose_equal(&r.pose, &last.pose);
+	struct mvod_pose p = map_pose(31);
+	r = feed(vo, &p);
+	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_INITIALIZING);
+	assert_pose_equal(&r.pose, &last.pose);
+	p = map_pose(32);
+	r = feed(vo, &p);
+	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_INITIALIZING);
+	assert_int_equal(r.scale_source, MVOD_SCALE_CONSTANT_SPEED);
+	/* The last step's length, copied: equal but for the pose chain's rounding (~1e-16). */
+	assert_true(fabs(r.step_m - last.step_m) < 1e-12);
+	assert_no_jump(&r, &moved, 32, s, &worst);
+	print_message("map mode: worst step / true step %.6f\n", worst);
+	mvod_vo_destroy(vo);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -465,6 +586,7 @@ int main(void)
 		cmocka_unit_test(test_few_features_keep_reference),
 		cmocka_unit_test(test_restart_keeps_pose),
 		cmocka_unit_test(test_seam_refuses_bad_features),
+		cmocka_unit_test(test_map_states),
 	};
 	return cmocka_run_group_tests(tests, setup_world, NULL);
 }
