@@ -370,12 +370,6 @@ static void test_map_klt_black(void **state)
 	mvod_traj_free(&r.traj);
 }
 
-/* |a - b| of two 3-vectors. */
-static double dist3(const double a[3], const double b[3])
-{
-	return mvod_vec3_dist(a, b);
-}
-
 /*
  * A map-mode run of mvod-synth's path (60 frames, the default front end) beside its ground
  * truth gt (gt.tum); returns s, the run's units per metre: the first motion frame's unit step
@@ -390,8 +384,8 @@ static double map_run(const char *path, struct run *r, struct mvod_traj *gt)
 		fail_msg("%s", err);
 	assert_int_equal(gt->n, 60);
 	int first = expect_start(r);
-	return dist3(r->pose[first].position, r->pose[0].position) /
-	       dist3(gt->pose[first].t, gt->pose[0].t);
+	return mvod_vec3_dist(r->pose[first].position, r->pose[0].position) /
+	       mvod_vec3_dist(gt->pose[first].t, gt->pose[0].t);
 }
 
 /*
@@ -405,17 +399,18 @@ static double map_run(const char *path, struct run *r, struct mvod_traj *gt)
  * The pose never jumps: each step at most k = 2 times the true step (true steps of held frames
  * accumulate into the next moving one), plus STILL_M, all in the run's units s. Measured worst
  * ratios 1.03 (turn) and 1.11 (stop-go): 2 leaves room for the map's scale to wander; a map
- * re-initialised at unit length would step 5 times (turn) or 3 times (stop-go) the true step. Returns the worst ratio among frames that truly moved.
+ * re-initialised at unit length would step 5 times (turn) or 3 times (stop-go) the true step.
+ * Returns the worst ratio among frames that truly moved.
  */
 static double map_no_jump(const struct run *r, const struct mvod_traj *gt, double s)
 {
 	double worst = 0;
 	int moved = 0;
 	for (int i = 1; i < r->poses; i++) {
-		double step = dist3(r->pose[i].position, r->pose[i - 1].position);
+		double step = mvod_vec3_dist(r->pose[i].position, r->pose[i - 1].position);
 		if (step == 0)
 			continue;
-		double truth = dist3(gt->pose[i].t, gt->pose[moved].t);
+		double truth = mvod_vec3_dist(gt->pose[i].t, gt->pose[moved].t);
 		if (step > s * (2 * truth + STILL_M))
 			fail_msg("frame %d: step %.4f, true %.4f m x %.3f", i, step, truth, s);
 		if (truth > STILL_M)
@@ -486,9 +481,9 @@ static void test_map_turn(void **state)
 /*
  * Map mode on stop-go: standing still over frames 24-29 (40-50 % of 60) invents no translation
  * (each standing frame's step below STILL_M, 1 % of a full-speed step, in the run's units:
- * measured 2.6e-5 m, 0.03 %, the map's points re-observed from one place); the map is lost once while
- * pulling away (measured frame 42), and tracking against a rebuilt map resumes by frame 46
- * (measured 43), and the pose never jumps.
+ * measured 2.6e-5 m, 0.03 %, the map's points re-observed from one place); the map is lost
+ * once after pulling away (measured frame 42), tracking against a rebuilt map resumes for
+ * good by frame 46 (measured 43: the loss is one frame), and the pose never jumps.
  */
 static void test_map_stop_go(void **state)
 {
@@ -498,10 +493,11 @@ static void test_map_stop_go(void **state)
 	double s = map_run("stop-go", &r, &gt);
 	double still = 0;
 	for (int i = 25; i < 30; i++) {
-		assert_true(dist3(gt.pose[i].t, gt.pose[i - 1].t) < 1e-9); /* the path stands */
+		/* the path stands */
+		assert_true(mvod_vec3_dist(gt.pose[i].t, gt.pose[i - 1].t) < 1e-9);
 		expect_pose(&r, i, MVOD_POSE_T_FRAME_MOTION, MVOD_POSE_T_STATE_TRACKING,
 			    MVOD_POSE_T_SCALE_MAP);
-		still = fmax(still, dist3(r.pose[i].position, r.pose[i - 1].position) / s);
+		still = fmax(still, mvod_vec3_dist(r.pose[i].position, r.pose[i - 1].position) / s);
 	}
 	print_message("stop-go: largest standing step %.6f m (of the run's scale)\n", still);
 	assert_true(still < STILL_M);

@@ -102,16 +102,30 @@ static struct mvod_pose at(double x, double y, double z, double yaw_deg)
 	return p;
 }
 
-static struct mvod_vo *make_vo(enum mvod_scale_mode scale)
+/*
+ * A VO in mode with scale. Map mode waits for each bundle adjustment (ba_sync), so every
+ * frame's outcome is fixed; two-view mode has none to wait for.
+ */
+static struct mvod_vo *make_vo_in(enum mvod_vo_mode mode, enum mvod_scale_mode scale)
 {
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
-	/* The seam below the detector takes keypoints with descriptors: the descriptor front end. */
+	p.mode = mode;
+	p.ba_sync = true;
+	/*
+	 * The seam below the detector takes keypoints with descriptors: the descriptor front end
+	 * (in map mode, its path of matching the map's points by projection).
+	 */
 	p.frontend = MVOD_FRONTEND_ORB;
 	p.scale_mode = scale;
 	struct mvod_vo *vo = NULL;
 	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
 	return vo;
+}
+
+static struct mvod_vo *make_vo(enum mvod_scale_mode scale)
+{
+	return make_vo_in(MVOD_VO_TWOVIEW, scale);
 }
 
 static struct mvod_vo_result feed_view(struct mvod_vo *vo, const struct view *v)
@@ -452,20 +466,6 @@ static void test_quality(void **state)
 }
 
 
-/* Map mode (descriptor path: the seam feeds features below the detector), bundle adjustment
- * waited for so each frame's outcome is fixed. */
-static struct mvod_vo *make_map_vo(void)
-{
-	struct mvod_vo_params p;
-	mvod_vo_params_default(&p);
-	p.mode = MVOD_VO_MAP;
-	p.frontend = MVOD_FRONTEND_ORB;
-	p.ba_sync = true;
-	struct mvod_vo *vo = NULL;
-	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
-	return vo;
-}
-
 /* Map test's camera at frame i: 1 cm a frame for frames 0-2, then 25 cm a frame, forward. */
 static struct mvod_pose map_pose(int i)
 {
@@ -528,7 +528,7 @@ static struct mvod_vo_result feed_unmatchable(struct mvod_vo *vo)
  */
 static void test_map_states(void **state)
 {
-	struct mvod_vo *vo = make_map_vo();
+	struct mvod_vo *vo = make_vo_in(MVOD_VO_MAP, MVOD_SCALE_MODE_AUTO);
 	struct mvod_vo_result r;
 	for (int i = 0; i < 5; i++) {
 		struct mvod_pose p = map_pose(i);
