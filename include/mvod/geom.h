@@ -26,6 +26,12 @@ void mvod_mat3_mul_bt(const double A[9], const double B[9], double C[9]); /* C =
 void mvod_mat3_mul_at(const double A[9], const double B[9], double C[9]); /* C = A^T B */
 void mvod_mat3_vec(const double A[9], const double v[3], double out[3]);
 void mvod_mat3_tvec(const double A[9], const double v[3], double out[3]); /* A^T v */
+/*
+ * The motion from camera-from-world pose a (Ra, ta) to b (Rb, tb): X_b = R X_a + t, so
+ * R = Rb Ra^T and t = tb - R ta. R and t must not alias the inputs.
+ */
+void mvod_motion_between(const double Ra[9], const double ta[3], const double Rb[9],
+			 const double tb[3], double R[9], double t[3]);
 double mvod_vec3_norm(const double v[3]);
 double mvod_vec3_dist(const double a[3], const double b[3]);
 double mvod_mat3_det(const double A[9]);

@@ -54,6 +54,16 @@ void mvod_mat3_tvec(const double A[9], const double v[3], double out[3])
 	memcpy(out, tmp, sizeof(tmp));
 }
 
+void mvod_motion_between(const double Ra[9], const double ta[3], const double Rb[9],
+			 const double tb[3], double R[9], double t[3])
+{
+	double v[3];
+	mvod_mat3_mul_bt(Rb, Ra, R);
+	mvod_mat3_vec(R, ta, v);
+	for (int k = 0; k < 3; k++)
+		t[k] = tb[k] - v[k];
+}
+
 double mvod_vec3_norm(const double v[3])
 {
 	return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);

@@ -246,11 +246,7 @@ static void publish(struct mvod_vo *vo, const double R[9], const double t[3], co
 /* Velocity (the motion from the last frame to this one), then this frame's pose. */
 static void set_pose(struct mvod_mapvo *mv, const double R[9], const double t[3])
 {
-	double v[3];
-	mvod_mat3_mul_bt(R, mv->Rcw, mv->vR);
-	mvod_mat3_vec(mv->vR, mv->tcw, v);
-	for (int k = 0; k < 3; k++)
-		mv->vt[k] = t[k] - v[k];
+	mvod_motion_between(mv->Rcw, mv->tcw, R, t, mv->vR, mv->vt);
 	memcpy(mv->Rcw, R, sizeof(mv->Rcw));
 	memcpy(mv->tcw, t, sizeof(mv->tcw));
 }
