@@ -126,13 +126,9 @@ static void start_tracking(struct mvod_mapvo *mv, mvod_map_id a, mvod_map_id b)
 {
 	const struct mvod_map_keyframe *ka = mvod_map_keyframe(mv->map, a);
 	const struct mvod_map_keyframe *kb = mvod_map_keyframe(mv->map, b);
-	double v[3];
 	memcpy(mv->Rcw, kb->Rcw, sizeof(mv->Rcw));
 	memcpy(mv->tcw, kb->tcw, sizeof(mv->tcw));
-	mvod_mat3_mul_bt(kb->Rcw, ka->Rcw, mv->vR);
-	mvod_mat3_vec(mv->vR, ka->tcw, v);
-	for (int k = 0; k < 3; k++)
-		mv->vt[k] = kb->tcw[k] - v[k];
+	mvod_motion_between(ka->Rcw, ka->tcw, kb->Rcw, kb->tcw, mv->vR, mv->vt);
 	mv->since_kf = 0;
 	mv->kf_tracked = mvod_map_n_points(mv->map);
 	mv->active = true;
@@ -240,15 +236,20 @@ static bool triangulate(const struct mvod_mapvo *mv, const struct mvod_map_keyfr
 	       reprojects(mv->K, B->Rcw, B->tcw, X, &B->kp[jb]);
 }
 
-/* The motion from keyframe A to B: X_B = R X_A + t. */
-static void relative(const struct mvod_map_keyframe *A, const struct mvod_map_keyframe *B,
-		     double R[9], double t[3])
+/*
+ * Keypoint ja of keyframe A (id a) with jb of B (id b), R, t the motion from A to B: a new point
+ * when they triangulate with rays at most max_cos apart. 0 also when they do not, -ENOSPC
+ * when the map is full, or -errno.
+ */
+static int new_point(struct mvod_mapvo *mv, mvod_map_id a, const struct mvod_map_keyframe *A,
+		     int ja, mvod_map_id b, const struct mvod_map_keyframe *B, int jb,
+		     const double R[9], const double t[3], double max_cos)
 {
-	double v[3];
-	mvod_mat3_mul_bt(B->Rcw, A->Rcw, R);
-	mvod_mat3_vec(R, A->tcw, v);
-	for (int k = 0; k < 3; k++)
-		t[k] = B->tcw[k] - v[k];
+	double X[3];
+	mvod_map_id id;
+	if (!triangulate(mv, A, B, R, t, ja, jb, max_cos, X))
+		return 0;
+	return add_point(mv, X, a, ja, b, jb, &id);
 }
 
 /* New points from the unmatched keypoints of keyframes a (older) and b (the new one). */
@@ -263,14 +264,10 @@ static int triangulate_pair(struct mvod_vo *vo, mvod_map_id a, mvod_map_id b)
 	if (ret)
 		return ret;
 	double R[9], t[3];
-	relative(A, B, R, t);
+	mvod_motion_between(A->Rcw, A->tcw, B->Rcw, B->tcw, R, t);
 	for (int i = 0; i < nm; i++) {
 		int ja = mv->ia[vo->matches[i].a], jb = mv->ib[vo->matches[i].b];
-		double X[3];
-		mvod_map_id id;
-		if (!triangulate(mv, A, B, R, t, ja, jb, MAX_COS_PARALLAX, X))
-			continue;
-		ret = add_point(mv, X, a, ja, b, jb, &id);
+		ret = new_point(mv, a, A, ja, b, B, jb, R, t, MAX_COS_PARALLAX);
 		if (ret == -ENOSPC)
 			return 0;
 		if (ret)
@@ -297,12 +294,9 @@ static int triangulate_tracks(struct mvod_mapvo *mv, mvod_map_id b)
 			*first = (struct mvod_map_obs){b, j};
 			continue;
 		}
-		double R[9], t[3], X[3];
-		mvod_map_id id;
-		relative(A, B, R, t);
-		if (!triangulate(mv, A, B, R, t, first->kp, j, KLT_MAX_COS_PARALLAX, X))
-			continue;
-		int ret = add_point(mv, X, first->kf, first->kp, b, j, &id);
+		double R[9], t[3];
+		mvod_motion_between(A->Rcw, A->tcw, B->Rcw, B->tcw, R, t);
+		int ret = new_point(mv, first->kf, A, first->kp, b, B, j, R, t, KLT_MAX_COS_PARALLAX);
 		if (ret == -ENOSPC)
 			return 0;
 		if (ret)
