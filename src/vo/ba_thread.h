@@ -43,7 +43,7 @@ void mvod_ba_thread_destroy(struct mvod_ba_thread *t);
 
 /*
  * Frame thread: the job to fill, or NULL while the BA thread holds it or its result waits to
- * be taken (a keyframe then goes without bundle adjustment; the next one has it).
+ * be taken (mvod_ba_thread_take it first).
  */
 struct mvod_ba_job *mvod_ba_thread_job(struct mvod_ba_thread *t);
 /* Frame thread: hands the filled job to the BA thread. */

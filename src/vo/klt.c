@@ -371,7 +371,7 @@ static int band_slot(struct mvod_klt *k, const float quad[8], int *victim)
 }
 
 int mvod_klt_reserve(struct mvod_klt *k, const struct mvod_image *grey, const float quad[8],
-		     int share, int band_threshold, struct mvod_features *f, int *added)
+		     int share, int band_threshold, struct mvod_features *f)
 {
 	int have = 0, nc, victim = k->n - 1, n_added = 0;
 	memset(k->occ, 0, (size_t)k->occ_w * (size_t)k->occ_h);
@@ -393,8 +393,6 @@ int mvod_klt_reserve(struct mvod_klt *k, const struct mvod_image *grey, const fl
 		n_added++;
 	}
 	f->n = k->n;
-	if (added)
-		*added = n_added;
 	return ret;
 }
 

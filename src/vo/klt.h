@@ -43,10 +43,10 @@ int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvo
  * pixels), FAST corners of grey at band_threshold inside it become new tracks, in the place of
  * the youngest tracks outside it that the reference does not hold, or in free capacity. f and
  * the matches mvod_klt_track wrote stay valid: replaced tracks had no match, f is updated.
- * Returns 0 or -errno; *added (may be NULL) receives the count of new tracks.
+ * Returns 0 or -errno.
  */
 int mvod_klt_reserve(struct mvod_klt *k, const struct mvod_image *grey, const float quad[8],
-		     int share, int band_threshold, struct mvod_features *f, int *added);
+		     int share, int band_threshold, struct mvod_features *f);
 
 /* The frame last tracked became the reference: its feature i is track i. */
 void mvod_klt_promote(struct mvod_klt *k);

@@ -66,7 +66,7 @@ struct mvod_mapvo {
 };
 
 /*
- * For the VO's camera (vo->cam) and feature cap (vo->cap); ORB descriptors only (-EINVAL
+ * For the VO's camera (vo->cam) and feature cap (vo->cap); with descriptors, ORB only (-EINVAL
  * otherwise). With the KLT front end (vo->klt) the map's points ride on the tracks: a track
  * carries the id of the point it observes from frame to frame, and no descriptor is computed.
  */
@@ -99,8 +99,8 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
 int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added);
 /*
  * Windowed bundle adjustment (mapping_ba.c), the two oldest keyframes held (the gauge:
- * position and scale): posts the window to the BA thread, unless it is still busy with the
- * last one (that keyframe then goes without).
+ * position and scale): posts the window to the BA thread, after waiting for the last keyframe's
+ * solve and landing it when that is still running.
  */
 int mvod_mapping_ba(struct mvod_mapvo *mv);
 /*

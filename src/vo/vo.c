@@ -481,7 +481,7 @@ static int klt_track(struct mvod_vo *vo, const struct mvod_image *grey)
 				  vo->cam.cy, quad) != 0)
 		return ret;
 	return mvod_klt_reserve(vo->klt, grey, quad, vo->p.max_tracks / BAND_SHARE, BAND_FAST,
-				&vo->cur->f, NULL);
+				&vo->cur->f);
 }
 
 int mvod_vo_process(struct mvod_vo *vo, const struct mvod_image *img, const double *gt_position,
