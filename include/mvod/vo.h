@@ -176,8 +176,10 @@ extern const char *const mvod_vo_descriptor_flags[];
  */
 enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p);
 /*
- * Whether the options fit the front end: --frontend klt with a descriptor option set is
- * -EINVAL naming both in err (the option would be silently ignored).
+ * Whether the options fit the mode and front end, each clash -EINVAL naming the options in
+ * err (an option would otherwise be silently ignored): --frontend klt with a descriptor
+ * option, --tracks where the descriptor front end runs, --mode map with a detector other
+ * than ORB (its map keeps ORB descriptors).
  */
 int mvod_vo_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen);
 

@@ -192,22 +192,32 @@ static int parse_axis(char *text, struct axis *a)
 	return a->n ? 0 : grid_error("no values for", a->key);
 }
 
-/*
- * Drops from c the options its front end does not read, so that no two rows differ only by
- * an ignored axis: the descriptor options where klt runs, --tracks where orb does. base: the
- * options every run shares. -EINVAL when they clash with the front end (--detector for klt).
- */
-static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
+/* base with what c sets over it. */
+static void row_params(const struct mvod_vo_params *base, const struct config *c,
+		       struct mvod_vo_params *out)
 {
-	static const char *const klt_only[] = {"tracks", NULL};
 	struct mvod_config scratch;
 	mvod_config_default(&scratch);
 	scratch.run.vo = *base;
 	char err[256];
 	for (int i = 0; i + 1 < c->n; i += 2) /* values were checked by parse_axis */
 		mvod_config_set(&scratch, config_key(c->args[i] + 2), c->args[i + 1], err, sizeof(err));
-	bool klt = mvod_vo_frontend(&scratch.run.vo) == MVOD_FRONTEND_KLT;
-	const char *const *ignored = klt ? mvod_vo_descriptor_flags : klt_only;
+	*out = scratch.run.vo;
+}
+
+/*
+ * Drops from c the options its front end does not read, so that no two rows differ only by
+ * an ignored axis: the descriptor options where klt runs, --tracks where orb does. base: the
+ * options every run shares. -EINVAL when what remains clashes with the front end or the mode
+ * (--detector from base where klt runs, --tracks from base where orb does, map with SIFT).
+ */
+static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
+{
+	static const char *const klt_only[] = {"tracks", NULL};
+	struct mvod_vo_params p;
+	row_params(base, c, &p);
+	enum mvod_frontend fe = mvod_vo_frontend(&p);
+	const char *const *ignored = fe == MVOD_FRONTEND_KLT ? mvod_vo_descriptor_flags : klt_only;
 	int n = 0;
 	for (int i = 0; i + 1 < c->n; i += 2) {
 		if (in_list(c->args[i] + 2, ignored))
@@ -216,9 +226,10 @@ static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
 		memmove(c->args[n++], c->args[i + 1], sizeof(c->args[0]));
 	}
 	c->n = n;
-	struct mvod_vo_params shared = *base; /* what c itself sets is dropped or is klt's */
-	shared.frontend = MVOD_FRONTEND_KLT;
-	if (!klt || !mvod_vo_check_frontend(&shared, err, sizeof(err)))
+	row_params(base, c, &p);
+	p.frontend = fe;
+	char err[256];
+	if (!mvod_vo_check_frontend(&p, err, sizeof(err)))
 		return 0;
 	fprintf(stderr, "%s: --sweep: %s; see %s --help\n", cli_prog, err, cli_prog);
 	return -EINVAL;

@@ -164,7 +164,7 @@ void cli_usage_vo(FILE *out)
 "                                      ORB, 5 kd-trees for SIFT)\n"
 "                          flann-ratio FLANN with the ratio test\n"
 "  --features N          feature cap of the descriptor front end (default 2000)\n"
-"  --tracks N            track cap of the klt front end (default 500)\n"
+"  --tracks N            track cap of the klt front end (default 500; orb refuses it)\n"
 "  --ratio R             Lowe's ratio test threshold, 1 = off (default 0.8)\n"
 "  --best N              matches kept by bf-cross, 0 = all (default 200)\n"
 "  --robust magsac|ransac  robust estimator of the essential matrix: MAGSAC++ (default)\n"

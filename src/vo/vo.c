@@ -121,12 +121,25 @@ enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p)
 
 int mvod_vo_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen)
 {
+	struct mvod_vo_params d;
+	mvod_vo_params_default(&d);
 	const char *opt = mvod_vo_descriptor_option(p);
-	if (p->frontend != MVOD_FRONTEND_KLT || !opt)
+	if (p->mode == MVOD_VO_MAP && p->detector != MVOD_DETECTOR_ORB)
+		return mvod_errf(err, errlen, -EINVAL, "--mode map keeps ORB descriptors in its map, "
+				 "not %s: use --detector orb or --mode twoview",
+				 mvod_detector_name(p->detector));
+	if (p->frontend == MVOD_FRONTEND_KLT && opt)
+		return mvod_errf(err, errlen, -EINVAL, "--%s is an option of the descriptor front "
+				 "end, which --frontend klt does not run: drop --%s, or use "
+				 "--frontend orb (or auto, which then picks orb)", opt, opt);
+	if (mvod_vo_frontend(p) != MVOD_FRONTEND_ORB || p->max_tracks == d.max_tracks)
 		return 0;
-	return mvod_errf(err, errlen, -EINVAL, "--%s is an option of the descriptor front end, "
-			 "which --frontend klt does not run: drop --%s, or use --frontend orb (or "
-			 "auto, which then picks orb)", opt, opt);
+	if (p->frontend == MVOD_FRONTEND_ORB)
+		return mvod_errf(err, errlen, -EINVAL, "--tracks is an option of the KLT front end, "
+				 "which --frontend orb does not run: drop --tracks, or use "
+				 "--frontend klt (or auto)");
+	return mvod_errf(err, errlen, -EINVAL, "--tracks is an option of the KLT front end and "
+			 "--%s one of the descriptor front end: drop one of them", opt);
 }
 
 bool mvod_vo_tracked(const struct mvod_vo_result *res)
@@ -185,10 +198,6 @@ static int alloc_buffers(struct mvod_vo *vo)
 int mvod_vo_check_size(const struct mvod_vo_params *params, const struct mvod_camera *cam,
 		       char *err, size_t errlen)
 {
-	if (params->mode == MVOD_VO_MAP && params->detector != MVOD_DETECTOR_ORB)
-		return mvod_errf(err, errlen, -EINVAL, "--mode map keeps ORB descriptors in its map, "
-				 "not %s: use --detector orb or --mode twoview",
-				 mvod_detector_name(params->detector));
 	int ret = mvod_vo_check_frontend(params, err, errlen);
 	if (ret)
 		return ret;

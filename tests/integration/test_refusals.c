@@ -2,7 +2,7 @@
  * Refusals that say what is wrong (issue 10): calibrations that cannot be a camera of their
  * image size, and the messages that were unclear: a channel name too long for LCM, images too
  * small for the detector, a UTF-8 byte order mark in a calibration file (now accepted), an empty
- * calibration file, running out of memory.
+ * calibration file, running out of memory, options the mode or front end would ignore.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -112,6 +112,26 @@ static void test_image_too_small(void **state)
 			 "pixels the feature detector needs: raise --resize", "--resize", "0.05", NULL);
 }
 
+/*
+ * Options that the chosen mode or front end would ignore are usage errors (exit 2) before
+ * any frame is read, each naming the options that clash; map mode with SIFT was refused only
+ * once the run had started (exit 1), and --tracks with the descriptor front end not at all.
+ */
+static void test_option_clashes(void **state)
+{
+	(void)state;
+	expect(calib, 2, "--tracks is an option of the KLT front end, which --frontend orb does not "
+	       "run", "--frontend", "orb", "--tracks", "300", NULL);
+	expect(calib, 2, "--tracks is an option of the KLT front end and --features one of the "
+	       "descriptor front end", "--tracks", "300", "--features", "3000", NULL);
+	expect(calib, 2, "--mode map keeps ORB descriptors in its map, not sift", "--mode", "map",
+	       "--detector", "sift", NULL);
+	expect(calib, 2, "--matcher is an option of the descriptor front end", "--frontend", "klt",
+	       "--matcher", "flann", NULL);
+	expect(calib, 0, "mvod: 4 frames", "--tracks", "300", NULL);
+	expect(calib, 0, "mvod: 4 frames", "--frontend", "orb", "--features", "3000", NULL);
+}
+
 /* A calibration file saved by a Windows editor starts with a byte order mark: it is read. */
 static void test_bom(void **state)
 {
@@ -206,6 +226,7 @@ int main(void)
 		cmocka_unit_test(test_distortion),
 		cmocka_unit_test(test_channel_too_long),
 		cmocka_unit_test(test_image_too_small),
+		cmocka_unit_test(test_option_clashes),
 		cmocka_unit_test(test_bom),
 		cmocka_unit_test(test_empty_calibration),
 		cmocka_unit_test(test_out_of_memory),

@@ -394,7 +394,8 @@ static void test_seam_refuses_bad_features(void **state)
 /*
  * --frontend auto: klt in either mode with the descriptor options at their defaults; orb as
  * soon as any one of the five descriptor options differs; an explicit choice
- * stays. --frontend klt with a descriptor option is refused naming both.
+ * stays. --frontend klt with a descriptor option is refused naming both, as are --tracks
+ * where orb runs and map mode with SIFT.
  */
 static void test_frontend_auto(void **state)
 {
@@ -431,6 +432,21 @@ static void test_frontend_auto(void **state)
 	p = d;
 	p.frontend = MVOD_FRONTEND_ORB;
 	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
+	char err[256] = "";
+	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+	p.max_tracks = 300; /* the KLT front end's cap, where orb runs: refused */
+	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "--tracks"));
+	p.frontend = MVOD_FRONTEND_AUTO; /* auto picks klt then */
+	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+	p.max_features = 3000; /* and now orb: the two options pick different front ends */
+	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "--features"));
+	p = d;
+	p.mode = MVOD_VO_MAP;
+	p.detector = MVOD_DETECTOR_SIFT; /* the map keeps ORB descriptors */
+	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "--mode map"));
 }
 
 /*
