@@ -100,5 +100,6 @@ int mvod_cmd_board(int argc, char **argv);
 int mvod_cmd_convert(int argc, char **argv);
 int mvod_cmd_view(int argc, char **argv);
 int mvod_cmd_bench(int argc, char **argv);
+int mvod_cmd_mount(int argc, char **argv);
 
 #endif
