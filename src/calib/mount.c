@@ -11,6 +11,7 @@
 
 #include "calib/calib_shim.h"
 #include "mvod/geom.h"
+#include "mvod/log.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
 #include "util/linalg.h"
@@ -233,6 +234,11 @@ int mvod_mount_measure(const struct mvod_mount_opts *o, const struct mvod_camera
 	for (int i = 0; !ret && i < views.n; i++) {
 		ret = judge_view(o, cam, &views.obs[i], &res->views[i]);
 		res->n_views++;
+		const struct mvod_mount_view *v = &res->views[i];
+		LOG(DEBUG, "mount: frame %lld: %d corners, %.3f px, height %.4f m +- %.4f, pitch %.3f "
+			   "+- %.3f, roll %.3f +- %.3f deg, verdict %d", (long long)v->frame,
+		    views.obs[i].n, v->rms_px, v->m.height_m, v->sd.height_m, v->m.pitch_deg,
+		    v->sd.pitch_deg, v->m.roll_deg, v->sd.roll_deg, (int)v->verdict);
 		if (ret)
 			mvod_errf(err, errlen, ret, "%s: frame %lld: no board pose: %s", o->source,
 				  (long long)views.obs[i].frame, strerror(-ret));

@@ -4,6 +4,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace synth {
@@ -160,6 +161,10 @@ std::vector<BoardPose> floor_poses(const mvod_board &board, const Camera &cam, c
 	const cv::Vec3d n(std::cos(p) * std::sin(r), std::cos(p) * std::cos(r), std::sin(p));
 	const std::vector<cv::Point3d> points = outline_and_corners(board);
 	cv::RNG rng(stream_seed(seed, 5001));
+	// The board's centre in the lower half of the floor seen below the horizon (at the image
+	// centre's column): the far half shows it too small to detect.
+	const double horizon = std::max(0.0, cam.cy - cam.fy * n[2] / n[1]) / cam.height;
+	const double low = std::min(0.9, horizon + 0.5 * (1 - horizon));
 	std::vector<BoardPose> poses;
 	for (int i = 0; i < views; i++) {
 		for (int tries = 0;; tries++) {
@@ -167,7 +172,7 @@ std::vector<BoardPose> floor_poses(const mvod_board &board, const Camera &cam, c
 				throw Failure(kExitUsage, "no view of the whole board on the floor fits in the image: "
 							  "use a smaller board, a lower camera or more pitch");
 			// One draw per statement: the order of evaluation of arguments is unspecified.
-			const double u = rng.uniform(0.1, 0.9) * cam.width, v = rng.uniform(0.4, 0.95) * cam.height;
+			const double u = rng.uniform(0.1, 0.9) * cam.width, v = rng.uniform(low, 0.95) * cam.height;
 			const double yaw = rng.uniform(-kMaxTurn, kMaxTurn);
 			const cv::Vec3d ray((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1);
 			if (n.dot(ray) <= 1e-3)

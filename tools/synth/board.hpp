@@ -38,7 +38,7 @@ struct Floor {
 };
 
 // `views` poses of the board lying on the floor (printed face up, its top row the far one),
-// deterministic in seed: the centre under a random image point in the lower part of the
+// deterministic in seed: the centre under a random image point in the lower half of the floor seen in the
 // image, turned in the floor's plane up to 30 deg, every pattern corner at least 8 px inside
 // the image. Throws Failure when the floor leaves no such view.
 std::vector<BoardPose> floor_poses(const mvod_board &board, const Camera &cam, const Floor &floor, int views,

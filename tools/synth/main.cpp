@@ -128,7 +128,7 @@ Calibration target (--board):
                          leans to +x), mvod's mount convention: the floor's normal in the
                          camera frame is (cos P sin R, cos P cos R, sin P). Each view moves
                          the board on the floor (its centre under a random image point in
-                         the lower part of the image, turned up to 30 deg), whole in view;
+                         the nearer half of the floor in view, turned up to 30 deg), whole;
                          the dim wall behind is then 1 board-width under the floor
   Example: mvod-synth --out views/ --board chessboard:9x6:0.025 --views 40 --format png \
              --distortion -0.3,0.1,0,0,0 --noise 2
