@@ -163,9 +163,10 @@ static int too_few(const struct mvod_mount_result *res, const int *count, char *
 	const char *of = res->n_views > 1 ? "in every view " : "";
 	if (most == MVOD_MOUNT_HIGH_ERROR)
 		return mvod_errf(err, errlen, -EDOM, "the board's corners %sare %.2f px or more off "
-				 "its best pose (at most %g px): the camera file is not this camera's, "
-				 "or --board's sizes are not the printed board's", of, v->rms_px,
-				 MVOD_MOUNT_MAX_RMS_PX);
+				 "its best pose (at most %g px): move the board closer (corners far "
+				 "away or at a grazing angle are found poorly), and check that the "
+				 "camera file is this camera's and --board the printed board's sizes",
+				 of, v->rms_px, MVOD_MOUNT_MAX_RMS_PX);
 	if (most == MVOD_MOUNT_NOT_FLAT)
 		return mvod_errf(err, errlen, -EDOM, "the board %sis not lying flat on the floor: its "
 				 "plane gives a pitch of %.1f deg and a roll of %.1f deg (a mount has at "

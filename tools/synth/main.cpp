@@ -320,8 +320,9 @@ Options parse_options(int argc, char **argv)
 		case INVERTED: o.inverted = true; break;
 		case FLOOR: {
 			const std::vector<double> f = parse_list(name, optarg, 3, 3);
-			if (!(f[0] > 0) || std::fabs(f[1]) > 60 || std::fabs(f[2]) > 60)
-				usage_error("--floor: HEIGHT must be positive and PITCH, ROLL within +-60 deg");
+			// Beyond mvod's +-60 deg too: a board that stands rather than lies, for mvod mount's refusal.
+			if (!(f[0] > 0) || std::fabs(f[1]) >= 90 || std::fabs(f[2]) >= 90)
+				usage_error("--floor: HEIGHT must be positive and PITCH, ROLL within +-90 deg");
 			o.floor = Floor{f[0], f[1], f[2]};
 			o.on_floor = true;
 			break;
