@@ -197,14 +197,6 @@ static void print_result(const struct cli *c, const struct mvod_mount_result *r)
 		printf("%s: wrote the mount into %s\n", cli_prog, c->calib);
 }
 
-static volatile sig_atomic_t stop_reading;
-
-static void on_stop(int sig)
-{
-	(void)sig;
-	stop_reading = 1;
-}
-
 int mvod_cmd_mount(int argc, char **argv)
 {
 	struct cli c = {0};
@@ -216,11 +208,8 @@ int mvod_cmd_mount(int argc, char **argv)
 	char *text = NULL, err[1024];
 	if (open_camera(&c, &cam, &text))
 		return EXIT_FAILURE;
-	/* A live camera never ends: the first Ctrl-C ends the recording (as mvod calibrate). */
-	struct sigaction sa = {.sa_handler = on_stop, .sa_flags = SA_RESETHAND};
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
-	c.o.stop = &stop_reading;
+	/* A live camera never ends: the first Ctrl-C ends the recording and works on it. */
+	c.o.stop = cli_stop_on_interrupt();
 	struct mvod_mount_result res;
 	ret = mvod_mount_measure(&c.o, &cam, &res, err, sizeof(err));
 	if (ret)
