@@ -97,6 +97,7 @@ int mvod_mount_combine(struct mvod_mount_view *v, int n, struct mvod_mount *m,
 		}
 		used++;
 		for (int k = 0; k < 3; k++) {
+			/* A zero deviation (exact corners, in tests) weighs most, finitely. */
 			double s = *field(&v[i].sd, k), w = 1 / (s * s + 1e-300);
 			sw[k] += w;
 			swx[k] += w * *field(&v[i].m, k);
