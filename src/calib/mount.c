@@ -116,9 +116,16 @@ static int judge_view(const struct mvod_mount_opts *o, const struct mvod_camera 
 {
 	struct mvod_calib_pose pose;
 	int ret = mvod_calib_board_pose(&o->board, obs, cam, MVOD_MOUNT_MIN_SIGMA_PX, &pose);
+	v->frame = obs->frame;
+	if (ret == -EDOM) {
+		/* No pose, or one the corners do not pin down: a view like any uncertain one. */
+		*v = (struct mvod_mount_view){.frame = obs->frame, .m = {NAN, NAN, NAN},
+					      .sd = {INFINITY, INFINITY, INFINITY},
+					      .rms_px = NAN, .verdict = MVOD_MOUNT_UNCERTAIN};
+		return 0;
+	}
 	if (ret)
 		return ret;
-	v->frame = obs->frame;
 	v->rms_px = pose.rms_px;
 	/* The covariance scales with the corners' error squared. */
 	double s = fmax(pose.rms_px, MVOD_MOUNT_MIN_SIGMA_PX) / MVOD_MOUNT_MIN_SIGMA_PX;
@@ -139,14 +146,20 @@ static int judge_view(const struct mvod_mount_opts *o, const struct mvod_camera 
 	return 0;
 }
 
-/* The worst of the views' numbers behind a verdict, for its message. */
+/* How far a refused view is from being used: its deviation when uncertain, else its error. */
+static double badness(const struct mvod_mount_view *v)
+{
+	return v->verdict == MVOD_MOUNT_UNCERTAIN ? v->sd.height_m : v->rms_px;
+}
+
+/* The best of the views refused for verdict: its numbers are the message's. */
 static const struct mvod_mount_view *typical(const struct mvod_mount_result *res,
 					     enum mvod_mount_verdict verdict)
 {
 	const struct mvod_mount_view *best = NULL;
 	for (int i = 0; i < res->n_views; i++)
 		if (res->views[i].verdict == verdict &&
-		    (!best || res->views[i].rms_px < best->rms_px))
+		    (!best || badness(&res->views[i]) < badness(best)))
 			best = &res->views[i];
 	return best;
 }
@@ -161,7 +174,11 @@ static int too_few(const struct mvod_mount_result *res, const int *count, char *
 	if (res->used > 0)
 		most = MVOD_MOUNT_DISAGREES;
 	const struct mvod_mount_view *v = typical(res, (enum mvod_mount_verdict)most);
-	const char *of = res->n_views > 1 ? "in every view " : "";
+	char of[48] = "";
+	if (res->n_views > 1 && count[most] == res->n_views)
+		snprintf(of, sizeof(of), "in every view ");
+	else if (res->n_views > 1)
+		snprintf(of, sizeof(of), "in %d of %d views ", count[most], res->n_views);
 	if (most == MVOD_MOUNT_HIGH_ERROR)
 		return mvod_errf(err, errlen, -EDOM, "the board's corners %sare %.2f px or more off "
 				 "its best pose (at most %g px): move the board closer (corners far "
