@@ -13,6 +13,7 @@ struct command {
 static const struct command commands[] = {
 	{"run", mvod_cmd_run},
 	{"calibrate", mvod_cmd_calibrate},
+	{"mount", mvod_cmd_mount},
 	{"board", mvod_cmd_board},
 	{"calib-convert", mvod_cmd_convert},
 	{"view", mvod_cmd_view},

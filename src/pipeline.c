@@ -192,6 +192,22 @@ static int check_output_frame(struct run *r)
 	return 0;
 }
 
+/* Which height --scale height takes, and from where (the VO takes the same, vo.c's mount()). */
+static void log_height(const struct run *r)
+{
+	const struct mvod_run_opts *o = r->o;
+	const struct mvod_camera *c = &r->cam;
+	if (o->vo.camera_height_m > 0)
+		LOG(INFO, "--scale height: the camera is %.4f m above the ground (--camera-height)",
+		    o->vo.camera_height_m);
+	else
+		LOG(INFO, "--scale height: the camera is %.4f m above the ground (the mount in %s)",
+		    c->mount_height_m, o->calib ? o->calib : "the calibration");
+	if (c->has_mount)
+		LOG(INFO, "--scale height: the ground's first normal from the mount: pitch %.2f deg, "
+			  "roll %.2f deg", c->mount_pitch_deg, c->mount_roll_deg);
+}
+
 /* --scale height needs a height; --scale external its source of speed. */
 static int open_scale(struct run *r)
 {
@@ -204,6 +220,8 @@ static int open_scale(struct run *r)
 			   "roll_deg)");
 		return -EINVAL;
 	}
+	if (o->vo.scale_mode == MVOD_SCALE_MODE_HEIGHT)
+		log_height(r);
 	if (o->vo.scale_mode != MVOD_SCALE_MODE_EXTERNAL)
 		return 0;
 	if (!o->speed_url) {

@@ -41,6 +41,11 @@ struct mvod_camera {
 	double mount_height_m, mount_pitch_deg, mount_roll_deg;
 };
 
+/* Largest mount height taken, metres: above any robot or car; the same bound as --camera-height. */
+#define MVOD_MOUNT_MAX_HEIGHT_M 20.0
+/* Largest |pitch| and |roll|, degrees: beyond it the ground is out of a forward camera's view. */
+#define MVOD_MOUNT_MAX_ANGLE_DEG 60.0
+
 /*
  * What a calibration file records besides the intrinsics. A zero-initialised meta records
  * nothing but "rms_px": 0; every other field is written only when set. Pointers are borrowed.

@@ -122,11 +122,6 @@ static cJSON *json_parse(const char *text, char *err, size_t errlen)
 	return root;
 }
 
-/* Largest mount height taken, metres: above any robot or car; the same bound as --camera-height. */
-#define MOUNT_MAX_HEIGHT_M 20.0
-/* Largest |pitch| and |roll|, degrees: beyond it the ground is out of a forward camera's view. */
-#define MOUNT_MAX_ANGLE_DEG 60.0
-
 /* The optional "mount" block: {"height_m": H, "pitch_deg": P, "roll_deg": R}. */
 static int json_mount(const cJSON *root, struct mvod_camera *c, char *err, size_t errlen)
 {
@@ -137,15 +132,15 @@ static int json_mount(const cJSON *root, struct mvod_camera *c, char *err, size_
 	const cJSON *p = cJSON_GetObjectItemCaseSensitive(m, "pitch_deg");
 	const cJSON *r = cJSON_GetObjectItemCaseSensitive(m, "roll_deg");
 	if (!cJSON_IsObject(m) || !cJSON_IsNumber(h) || !(h->valuedouble > 0) ||
-	    !(h->valuedouble <= MOUNT_MAX_HEIGHT_M) || (p && !cJSON_IsNumber(p)) ||
+	    !(h->valuedouble <= MVOD_MOUNT_MAX_HEIGHT_M) || (p && !cJSON_IsNumber(p)) ||
 	    (r && !cJSON_IsNumber(r)) ||
-	    (p && !(fabs(p->valuedouble) <= MOUNT_MAX_ANGLE_DEG)) ||
-	    (r && !(fabs(r->valuedouble) <= MOUNT_MAX_ANGLE_DEG)))
+	    (p && !(fabs(p->valuedouble) <= MVOD_MOUNT_MAX_ANGLE_DEG)) ||
+	    (r && !(fabs(r->valuedouble) <= MVOD_MOUNT_MAX_ANGLE_DEG)))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "\"mount\" must be {\"height_m\": metres above the ground, in (0, %g], "
 				 "\"pitch_deg\": degrees down, \"roll_deg\": degrees, each within "
 				 "+-%g}: correct it or remove it",
-				 MOUNT_MAX_HEIGHT_M, MOUNT_MAX_ANGLE_DEG);
+				 MVOD_MOUNT_MAX_HEIGHT_M, MVOD_MOUNT_MAX_ANGLE_DEG);
 	c->has_mount = true;
 	c->mount_height_m = h->valuedouble;
 	c->mount_pitch_deg = p ? p->valuedouble : 0.0;

@@ -271,8 +271,8 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 }
 
 /* Why there are not enough views, in terms of what the frames did show. */
-static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int views, char *err,
-		    size_t errlen)
+static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int views,
+		    int min_views, char *err, size_t errlen)
 {
 	const struct mvod_board *b = &o->board;
 	char spec[128];
@@ -284,7 +284,7 @@ static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int 
 		return mvod_errf(err, errlen, -ENODATA,
 				 "found the board in %d of %lld frames; calibration needs at least %d "
 				 "views: record more, with the board in different places and tilts",
-				 views, (long long)sc->frames, MVOD_CALIB_MIN_VIEWS);
+				 views, (long long)sc->frames, min_views);
 	if (b->kind == MVOD_BOARD_CHARUCO && sc->max_stray > 0)
 		return mvod_errf(err, errlen, -ENODATA,
 				 "found %s markers with ids up to %d but a %dx%d board has %d (ids 0-%d): "
@@ -317,8 +317,8 @@ static int no_views(const struct mvod_calib_opts *o, const struct scan *sc, int 
 						       : "COLSxROWS counts inner corners");
 }
 
-static int scan_source(const struct mvod_calib_opts *o, struct store *s, struct scan *sc,
-		       char *err, size_t errlen)
+static int scan_source(const struct mvod_calib_opts *o, int min_views, struct store *s,
+		       struct scan *sc, char *err, size_t errlen)
 {
 	struct mvod_source *src = NULL;
 	struct mvod_calib_det *det = NULL;
@@ -337,8 +337,8 @@ static int scan_source(const struct mvod_calib_opts *o, struct store *s, struct 
 		ret = read_all(o, src, det, s, sc, err, errlen);
 	mvod_calib_det_destroy(det);
 	mvod_source_close(src);
-	if (!ret && s->n < MVOD_CALIB_MIN_VIEWS)
-		ret = no_views(o, sc, s->n, err, errlen);
+	if (!ret && s->n < min_views)
+		ret = no_views(o, sc, s->n, min_views, err, errlen);
 	return ret;
 }
 
@@ -551,7 +551,7 @@ int mvod_calibrate(const struct mvod_calib_opts *o, struct mvod_calib_result *re
 	struct scan sc = {.max_id = -1};
 	struct fitting ft = {0};
 	double t0 = mvod_now_s();
-	int ret = scan_source(o, &s, &sc, err, errlen);
+	int ret = scan_source(o, MVOD_CALIB_MIN_VIEWS, &s, &sc, err, errlen);
 	double t1 = mvod_now_s();
 	res->read_s = t1 - t0;
 	res->frames_read = sc.frames;
@@ -602,4 +602,37 @@ void mvod_calib_result_meta(const struct mvod_calib_result *res, const struct mv
 	memcpy(meta->std_K, res->std_K, sizeof(meta->std_K));
 	memcpy(meta->std_dist, res->std_dist, sizeof(meta->std_dist));
 	snprintf(meta->verdict, sizeof(meta->verdict), "%s", mvod_calib_verdict_name(res->verdict));
+}
+
+int mvod_calib_read_views(const struct mvod_calib_opts *o, int min_views,
+			  struct mvod_calib_views *out, char *err, size_t errlen)
+{
+	memset(out, 0, sizeof(*out));
+	struct store *s = calloc(1, sizeof(*s));
+	struct scan sc = {.max_id = -1};
+	int ret = s ? scan_source(o, min_views, s, &sc, err, errlen)
+		    : mvod_errf(err, errlen, -ENOMEM, "out of memory");
+	out->pools = s;
+	out->w = sc.w;
+	out->h = sc.h;
+	out->frames = sc.frames;
+	free(sc.sample.data);
+	if (ret)
+		return ret;
+	out->obs = malloc(sizeof(*out->obs) * (size_t)s->n);
+	if (!out->obs)
+		return mvod_errf(err, errlen, -ENOMEM, "out of memory for %d views", s->n);
+	for (int i = 0; i < s->n; i++)
+		out->obs[i] = store_obs(s, i);
+	out->n = s->n;
+	return 0;
+}
+
+void mvod_calib_views_free(struct mvod_calib_views *v)
+{
+	if (v->pools)
+		store_free(v->pools);
+	free(v->pools);
+	free(v->obs);
+	memset(v, 0, sizeof(*v));
 }

@@ -542,3 +542,73 @@ extern "C" int mvod_calib_rough_tilts(const struct mvod_board *b, const struct m
 		return 0;
 	});
 }
+
+namespace {
+
+/* The view's corners as normalised image coordinates (x/z, y/z), the lens removed. */
+std::vector<cv::Point2d> normalised(const std::vector<cv::Point2f> &px, const mvod_camera &cam)
+{
+	const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+	const cv::Mat D(1, cam.n_dist, CV_64F, const_cast<double *>(cam.dist));
+	std::vector<cv::Point2d> in(px.begin(), px.end()), out;
+	if (cam.model == MVOD_CAM_FISHEYE_KB4)
+		cv::fisheye::undistortPoints(in, out, K, D);
+	else
+		cv::undistortPoints(in, out, K, cam.n_dist ? D : cv::Mat());
+	return out;
+}
+
+/* Reprojection RMS in pixels through the camera's own lens model. */
+double pose_rms_px(const std::vector<cv::Point3f> &obj, const std::vector<cv::Point2f> &px,
+		   const cv::Vec3d &r, const cv::Vec3d &t, const mvod_camera &cam)
+{
+	const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
+	const cv::Mat D(1, cam.n_dist, CV_64F, const_cast<double *>(cam.dist));
+	std::vector<cv::Point2f> proj;
+	if (cam.model == MVOD_CAM_FISHEYE_KB4)
+		cv::fisheye::projectPoints(obj, proj, r, t, K, D);
+	else
+		cv::projectPoints(obj, r, t, K, cam.n_dist ? D : cv::Mat(), proj);
+	double e = 0;
+	for (size_t k = 0; k < proj.size(); k++) {
+		cv::Point2f d = proj[k] - px[k];
+		e += d.dot(d);
+	}
+	return std::sqrt(e / (double)proj.size());
+}
+
+} // namespace
+
+extern "C" int mvod_calib_board_pose(const struct mvod_board *b, const struct mvod_calib_obs *v,
+				     const struct mvod_camera *cam, double sigma_px,
+				     struct mvod_calib_pose *out)
+{
+	return mvod_guarded([&] {
+		Views views = to_views(*b, v, 1);
+		std::vector<cv::Point2d> xn = normalised(views.img[0], *cam);
+		std::vector<cv::Point3d> obj(views.obj[0].begin(), views.obj[0].end());
+		/* IPPE: the planar solver, then Levenberg-Marquardt on all corners. */
+		cv::Vec3d r, t;
+		const cv::Matx33d I = cv::Matx33d::eye();
+		if (!cv::solvePnP(obj, xn, I, cv::noArray(), r, t, false, cv::SOLVEPNP_IPPE))
+			return -EDOM;
+		cv::solvePnPRefineLM(obj, xn, I, cv::noArray(), r, t);
+		/* Covariance sigma^2 (J^T J)^-1 of (rvec, tvec), sigma in normalised units. */
+		std::vector<cv::Point2d> proj;
+		cv::Mat J;
+		cv::projectPoints(obj, r, t, I, cv::noArray(), proj, J);
+		const double s = sigma_px / std::sqrt(cam->fx * cam->fy);
+		cv::Mat JtJ = J.colRange(0, 6).t() * J.colRange(0, 6), cov;
+		if (cv::invert(JtJ, cov, cv::DECOMP_SVD) <= 0)
+			return -EDOM;
+		cov *= s * s;
+		for (int k = 0; k < 3; k++) {
+			out->rvec[k] = r[k];
+			out->tvec[k] = t[k];
+		}
+		for (int k = 0; k < 36; k++)
+			out->cov[k] = cov.at<double>(k / 6, k % 6);
+		out->rms_px = pose_rms_px(views.obj[0], views.img[0], r, t, *cam);
+		return std::isfinite(out->rms_px) ? 0 : -EDOM;
+	});
+}

@@ -81,6 +81,39 @@ int mvod_calib_solve(const struct mvod_board *b, const struct mvod_calib_obs *v,
 int mvod_calib_rough_tilts(const struct mvod_board *b, const struct mvod_calib_obs *v, int n,
 			   int w, int h, double *rvecs);
 
+/*
+ * Every view of the board in o->source (read as mvod calibrate reads it: o's board,
+ * min_corners, max_frames and stop), for mvod mount. Fewer than min_views is an error saying
+ * what the frames showed instead. Free out with mvod_calib_views_free, also after a failure.
+ */
+struct mvod_calib_views {
+	int n;
+	struct mvod_calib_obs *obs; /* n views in source order; corners borrowed from pools */
+	int w, h;                   /* the frames' size, pixels */
+	int64_t frames;             /* frames read */
+	void *pools;                /* owned: the corners of every view */
+};
+int mvod_calib_read_views(const struct mvod_calib_opts *o, int min_views,
+			  struct mvod_calib_views *out, char *err, size_t errlen);
+void mvod_calib_views_free(struct mvod_calib_views *v);
+
+/* One view's board-to-camera pose under known intrinsics: X_cam = R(rvec) X_board + tvec. */
+struct mvod_calib_pose {
+	double rvec[3];  /* rotation vector, radians */
+	double tvec[3];  /* metres */
+	double cov[36];  /* covariance of (rvec, tvec), row-major 6x6, for corners of sigma_px */
+	double rms_px;   /* reprojection RMS through the camera's lens model, pixels */
+};
+
+/*
+ * The board's pose in view v (at least 4 corners not on one line) under cam's intrinsics and
+ * lens: the corners undistorted, IPPE (the planar solver), then Levenberg-Marquardt. The
+ * covariance takes the corners' error as sigma_px in each axis. -EDOM when no pose fits.
+ */
+int mvod_calib_board_pose(const struct mvod_board *b, const struct mvod_calib_obs *v,
+			  const struct mvod_camera *cam, double sigma_px,
+			  struct mvod_calib_pose *out);
+
 struct mvod_calib_report {
 	const struct mvod_camera *cam;
 	const struct mvod_calib_obs *views; /* the views used */

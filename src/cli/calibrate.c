@@ -176,14 +176,6 @@ static void print_result(const struct cli *c, const struct mvod_calib_result *r)
 	       c->o.report ? c->o.report : "");
 }
 
-static volatile sig_atomic_t stop_reading;
-
-static void on_stop(int sig)
-{
-	(void)sig;
-	stop_reading = 1;
-}
-
 int mvod_cmd_calibrate(int argc, char **argv)
 {
 	struct cli c = {0};
@@ -194,14 +186,8 @@ int mvod_cmd_calibrate(int argc, char **argv)
 	/* Found out now, not after an hour of video. */
 	if (cli_check_writable("--out", c.out) || (c.o.report && cli_check_writable("--report", c.o.report)))
 		return EXIT_FAILURE;
-	/*
-	 * A live camera never ends: the first Ctrl-C ends the recording and calibrates on it;
-	 * SA_RESETHAND lets a second one abort as usual.
-	 */
-	struct sigaction sa = {.sa_handler = on_stop, .sa_flags = SA_RESETHAND};
-	sigaction(SIGINT, &sa, NULL);
-	sigaction(SIGTERM, &sa, NULL);
-	c.o.stop = &stop_reading;
+	/* A live camera never ends: the first Ctrl-C ends the recording and works on it. */
+	c.o.stop = cli_stop_on_interrupt();
 	struct mvod_calib_result res;
 	char err[512];
 	ret = mvod_calibrate(&c.o, &res, err, sizeof(err));

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -296,4 +297,20 @@ void cli_quiet_libraries(void)
 		return;
 	setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", 0); /* AV_LOG_QUIET */
 	setenv("LIBCAMERA_LOG_LEVELS", "*:ERROR", 0);
+}
+
+static volatile sig_atomic_t stop_reading;
+
+static void on_stop(int sig)
+{
+	(void)sig;
+	stop_reading = 1;
+}
+
+volatile sig_atomic_t *cli_stop_on_interrupt(void)
+{
+	struct sigaction sa = {.sa_handler = on_stop, .sa_flags = SA_RESETHAND};
+	sigaction(SIGINT, &sa, NULL);
+	sigaction(SIGTERM, &sa, NULL);
+	return &stop_reading;
 }

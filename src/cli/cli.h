@@ -6,6 +6,7 @@
 #define MVOD_CLI_H
 
 #include <getopt.h>
+#include <signal.h>
 #include <stdbool.h>
 #include <stdio.h>
 
@@ -36,6 +37,12 @@ int cli_parse_board(const char *s, struct mvod_board *b);
 void cli_run_install_signals(void);
 
 int cli_check_writable(const char *opt, const char *path);
+
+/*
+ * A live camera never ends: the first SIGINT or SIGTERM sets the flag returned (reading stops
+ * and the command works on what it read); SA_RESETHAND lets a second one abort as usual.
+ */
+volatile sig_atomic_t *cli_stop_on_interrupt(void);
 
 /* Leaves FFmpeg's and libcamera's own diagnostics for --log-level debug: mvod says what to do. */
 void cli_quiet_libraries(void);
@@ -100,5 +107,6 @@ int mvod_cmd_board(int argc, char **argv);
 int mvod_cmd_convert(int argc, char **argv);
 int mvod_cmd_view(int argc, char **argv);
 int mvod_cmd_bench(int argc, char **argv);
+int mvod_cmd_mount(int argc, char **argv);
 
 #endif

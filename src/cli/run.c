@@ -79,7 +79,7 @@ static void usage(FILE *out)
 "Usage: mvod [run] --source URI [options]\n"
 "       mvod [run] --config FILE [options]\n"
 "       mvod --list-cameras\n"
-"       mvod calibrate|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
+"       mvod calibrate|mount|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
 "Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
 "\n");
 	cli_usage_input(out);
@@ -105,6 +105,7 @@ static void usage(FILE *out)
 "Commands:\n"
 "  run                   track a source and publish poses (the default)\n"
 "  calibrate             calibrate a camera from a ChArUco or chessboard recording\n"
+"  mount                 the camera's height, pitch and roll from a board on the floor\n"
 "  board                 write a printable calibration target\n"
 "  calib-convert IN OUT  convert OpenCV/ROS/KITTI calibration files to mvod JSON\n"
 "  bench                 measure accuracy and speed against ground truth\n"

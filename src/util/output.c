@@ -67,6 +67,23 @@ void mvod_inputs_forget(void)
 	pthread_mutex_unlock(&inputs.lock);
 }
 
+void mvod_input_release(const char *path)
+{
+	struct stat st;
+	if (stat(path, &st) != 0)
+		return;
+	pthread_mutex_lock(&inputs.lock);
+	for (size_t i = 0; i < inputs.n;) {
+		if (inputs.in[i].dev == st.st_dev && inputs.in[i].ino == st.st_ino) {
+			free(inputs.in[i].path);
+			inputs.in[i] = inputs.in[--inputs.n];
+		} else {
+			i++;
+		}
+	}
+	pthread_mutex_unlock(&inputs.lock);
+}
+
 /*
  * The same device and inode as an input whose name still leads to it: a file deleted after it
  * was read may give its inode number to a new file, which is no input.

@@ -29,6 +29,11 @@ extern "C" {
  * A path that does not exist is no input: 0. Returns 0 or -errno (-ENOMEM). Thread-safe.
  */
 int mvod_input_note(const char *path);
+/*
+ * Forgets path (followed through symlinks) as an input: for the one command that updates a
+ * file it read, whole, by temp+rename (mvod mount's camera file), after it has read it.
+ */
+void mvod_input_release(const char *path);
 /* Forgets every input noted (tests; a process ends without it). */
 void mvod_inputs_forget(void);
 

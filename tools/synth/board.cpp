@@ -4,6 +4,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace synth {
@@ -127,6 +128,65 @@ std::vector<BoardPose> board_poses(const mvod_board &board, const Camera &cam, i
 			pose = random_pose(board, cam, 0.5 + pull * (gx - 0.5), 0.5 + pull * (gy - 0.5), rng);
 		} while (!acceptable(pose, points, cam));
 		poses.push_back(pose);
+	}
+	return poses;
+}
+
+namespace {
+
+constexpr double kMaxTurn = 30 * kDeg; // the board's turn in the floor's plane
+
+// The board with its centre at floor point P, turned by yaw: board z along n (into the floor),
+// x to the camera's right at yaw 0, y = z cross x towards the camera.
+BoardPose on_floor(const mvod_board &board, const cv::Vec3d &n, const cv::Vec3d &P, double yaw)
+{
+	const cv::Vec3d f = cv::normalize(cv::Vec3d(0, 0, 1) - n[2] * n), g = n.cross(f);
+	const cv::Vec3d x = std::cos(yaw) * g + std::sin(yaw) * f, y = n.cross(x);
+	const cv::Matx33d R(x[0], y[0], n[0], x[1], y[1], n[1], x[2], y[2], n[2]);
+	int across, down;
+	mvod_board_squares(&board, &across, &down);
+	const cv::Vec3d centre(across * board.square_m / 2, down * board.square_m / 2, 0);
+	BoardPose pose;
+	cv::Rodrigues(R, pose.rvec);
+	pose.t = P - R * centre;
+	return pose;
+}
+
+} // namespace
+
+std::vector<BoardPose> floor_poses(const mvod_board &board, const Camera &cam, const Floor &floor, int views,
+				   uint64_t seed)
+{
+	const double p = floor.pitch_deg * kDeg, r = floor.roll_deg * kDeg;
+	const cv::Vec3d n(std::cos(p) * std::sin(r), std::cos(p) * std::cos(r), std::sin(p));
+	const std::vector<cv::Point3d> points = outline_and_corners(board);
+	cv::RNG rng(stream_seed(seed, 5001));
+	// The board's centre in the lower half of the floor seen below the horizon (at the image
+	// centre's column): the far half shows it too small to detect.
+	const double horizon = std::max(0.0, cam.cy - cam.fy * n[2] / n[1]) / cam.height;
+	const double low = std::min(0.9, horizon + 0.5 * (1 - horizon));
+	std::vector<BoardPose> poses;
+	for (int i = 0; i < views; i++) {
+		for (int tries = 0;; tries++) {
+			if (tries == kTries)
+				throw Failure(kExitUsage, "no view of the whole board on the floor fits in the image: "
+							  "use a smaller board, a lower camera or more pitch");
+			// One draw per statement: the order of evaluation of arguments is unspecified.
+			const double u = rng.uniform(0.1, 0.9) * cam.width, v = rng.uniform(low, 0.95) * cam.height;
+			const double yaw = rng.uniform(-kMaxTurn, kMaxTurn);
+			const cv::Vec3d ray((u - cam.cx) / cam.fx, (v - cam.cy) / cam.fy, 1);
+			if (n.dot(ray) <= 1e-3)
+				continue; // at or above the horizon
+			const BoardPose pose = on_floor(board, n, floor.height_m / n.dot(ray) * ray, yaw);
+			bool inside = true;
+			for (const cv::Point2d &q : project(points, cam, pose))
+				inside = inside && q.x >= kEdge && q.y >= kEdge && q.x <= cam.width - 1 - kEdge &&
+					 q.y <= cam.height - 1 - kEdge;
+			if (inside) {
+				poses.push_back(pose);
+				break;
+			}
+		}
 	}
 	return poses;
 }

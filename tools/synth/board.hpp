@@ -32,4 +32,16 @@ std::vector<cv::Point2d> project_corners(const mvod_board &board, const Camera &
 // the lens leaves no such view.
 std::vector<BoardPose> board_poses(const mvod_board &board, const Camera &cam, int views, uint64_t seed);
 
+// A still camera above a floor, in mvod's mount convention (include/mvod/mount.h).
+struct Floor {
+	double height_m = 0, pitch_deg = 0, roll_deg = 0;
+};
+
+// `views` poses of the board lying on the floor (printed face up, its top row the far one),
+// deterministic in seed: the centre under a random image point in the lower half of the floor seen in the
+// image, turned in the floor's plane up to 30 deg, every pattern corner at least 8 px inside
+// the image. Throws Failure when the floor leaves no such view.
+std::vector<BoardPose> floor_poses(const mvod_board &board, const Camera &cam, const Floor &floor, int views,
+				   uint64_t seed);
+
 } // namespace synth

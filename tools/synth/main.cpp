@@ -122,6 +122,14 @@ Calibration target (--board):
                          50 deg about both board axes and rotated in its plane up to 45 deg;
                          always the whole pattern in view, at least 8 px from the border
   --inverted             invert the printed board (white markers and squares on black)
+  --floor H,PITCH,ROLL   the board lies on a floor instead, seen by a still camera whose
+                         centre is H metres above it, pitched PITCH deg (positive: looking
+                         down) and rolled ROLL deg (positive: the floor's downward normal
+                         leans to +x), mvod's mount convention: the floor's normal in the
+                         camera frame is (cos P sin R, cos P cos R, sin P). Each view moves
+                         the board on the floor (its centre under a random image point in
+                         the nearer half of the floor in view, turned up to 30 deg), whole;
+                         the dim wall behind is then 1 board-width under the floor
   Example: mvod-synth --out views/ --board chessboard:9x6:0.025 --views 40 --format png \
              --distortion -0.3,0.1,0,0,0 --noise 2
   -h, --help             show this help
@@ -147,6 +155,8 @@ struct Options {
 	std::string board; // empty: the street
 	int views = 60;
 	bool inverted = false;
+	bool on_floor = false;
+	Floor floor;
 	bool street_options = false; // --path, --frames or --speed given
 };
 
@@ -237,7 +247,7 @@ void parse_size(const char *text, Options &o)
 Options parse_options(int argc, char **argv)
 {
 	enum { OUT = 256, PATH, FRAMES, FPS, SIZE, FX, FY, CX, CY, DISTORTION, FISHEYE, NOISE, BLUR, SEED, FORMAT, SPEED,
-	       BOARD, VIEWS, INVERTED };
+	       BOARD, VIEWS, INVERTED, FLOOR };
 	static const option longopts[] = {
 		{"out", required_argument, nullptr, OUT},
 		{"path", required_argument, nullptr, PATH},
@@ -258,6 +268,7 @@ Options parse_options(int argc, char **argv)
 		{"board", required_argument, nullptr, BOARD},
 		{"views", required_argument, nullptr, VIEWS},
 		{"inverted", no_argument, nullptr, INVERTED},
+		{"floor", required_argument, nullptr, FLOOR},
 		{"help", no_argument, nullptr, 'h'},
 		{nullptr, 0, nullptr, 0},
 	};
@@ -307,6 +318,15 @@ Options parse_options(int argc, char **argv)
 		case BOARD: o.board = optarg; break;
 		case VIEWS: o.views = parse_count(name, optarg); break;
 		case INVERTED: o.inverted = true; break;
+		case FLOOR: {
+			const std::vector<double> f = parse_list(name, optarg, 3, 3);
+			// Beyond mvod's +-60 deg too: a board that stands rather than lies, for mvod mount's refusal.
+			if (!(f[0] > 0) || std::fabs(f[1]) >= 90 || std::fabs(f[2]) >= 90)
+				usage_error("--floor: HEIGHT must be positive and PITCH, ROLL within +-90 deg");
+			o.floor = Floor{f[0], f[1], f[2]};
+			o.on_floor = true;
+			break;
+		}
 		case 'h':
 			std::fputs(kUsage, stdout);
 			std::exit(0);
@@ -320,6 +340,8 @@ Options parse_options(int argc, char **argv)
 		usage_error("--out DIR is required");
 	if (radtan && o.fisheye)
 		usage_error("--distortion and --fisheye are two lens models: give one");
+	if (o.on_floor && o.board.empty())
+		usage_error("--floor places a --board on the floor: give --board SPEC");
 	if (!o.board.empty() && o.street_options)
 		usage_error("--path, --frames and --speed describe the street; --board renders --views N views of a board");
 	return o;
@@ -624,7 +646,8 @@ void run_board(const Options &o, const std::string &command_line)
 	const World world = build_board_scene(face, pps * texel, texel, o.seed);
 	Renderer renderer(world, cam);
 	check_lens(renderer, o);
-	const std::vector<BoardPose> poses = board_poses(board, cam, o.views, o.seed);
+	const std::vector<BoardPose> poses =
+		o.on_floor ? floor_poses(board, cam, o.floor, o.views, o.seed) : board_poses(board, cam, o.views, o.seed);
 
 	Output out(o, cam, command_line);
 	cv::RNG noise_rng(stream_seed(o.seed, 7));
