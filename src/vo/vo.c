@@ -425,6 +425,7 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 		if (handled)
 			return handled < 0 ? handled : 0;
 	}
+	vo->cur->seq = vo->frames++;
 	int n = vo->cur->f.n;
 	const struct frame_slot *tracked = vo->cur;
 	bool matched = false; /* enough matches against the reference to estimate motion */

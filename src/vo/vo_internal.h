@@ -18,6 +18,7 @@ struct frame_slot {
 	struct mvod_pose pose; /* camera-to-world */
 	double gt[3]; /* ground-truth position, with --scale gt */
 	double odo;   /* --scale external: odometer at this frame, metres; NAN unknown */
+	int64_t seq;  /* the VO's count of frames when this one came: how many frames a step spans */
 };
 
 struct mvod_vo {
@@ -37,7 +38,9 @@ struct mvod_vo {
 	uint8_t *mask;
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
-	double last_step;   /* length of the last translation step, for constant speed */
+	int64_t frames;     /* frames processed, numbering the slots (seq) */
+	double last_step;   /* length of the last translation step per frame it spanned: the
+			     * speed constant speed assumes, in units a frame */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
 	struct mvod_scale_filter scale; /* --scale height, external */
