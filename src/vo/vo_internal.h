@@ -39,6 +39,7 @@ struct mvod_vo {
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
 	int64_t frames;     /* frames processed, numbering the slots (seq) */
+	int moving;         /* the last frame was a motion step (twoview.c's hysteresis) */
 	double last_step;   /* length of the last translation step per frame it spanned: the
 			     * speed constant speed assumes, in units a frame */
 	int have_step;
