@@ -445,7 +445,9 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 		mvod_klt_promote(vo->klt);
 	/* Map mode: TRACKING means against a map; two-view frames only keep the pose going. */
 	if (vo->mapvo) {
-		vo->state = made_map ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING;
+		vo->state = made_map	      ? MVOD_STATE_TRACKING
+			    : vo->mapvo->lost ? MVOD_STATE_LOST
+					      : MVOD_STATE_INITIALIZING;
 		map_counts(vo, res);
 	}
 	res->pose = vo->pose;
@@ -457,11 +459,12 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 }
 
 /* What both entry points check and clear first. */
-static int begin(const struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
+static int begin(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
 {
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT && !gt)
 		return -EINVAL;
 	memset(res, 0, sizeof(*res));
+	vo->cur->frame = vo->frames++;
 	return 0;
 }
 

@@ -18,6 +18,7 @@ struct frame_slot {
 	struct mvod_pose pose; /* camera-to-world */
 	double gt[3]; /* ground-truth position, with --scale gt */
 	double odo;   /* --scale external: odometer at this frame, metres; NAN unknown */
+	long long frame; /* the frame's number among those processed (mvod_vo.frames) */
 };
 
 struct mvod_vo {
@@ -37,6 +38,7 @@ struct mvod_vo {
 	uint8_t *mask;
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
+	long long frames; /* frames processed */
 	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
