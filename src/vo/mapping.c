@@ -137,8 +137,9 @@ static void start_tracking(struct mvod_mapvo *mv, mvod_map_id a, mvod_map_id b)
 /*
  * A map waits for parallax: a step with too few well-triangulated points keeps only its
  * rotation (as a rotation-only frame does), so the reference stays and the baseline grows.
- * After a loss too (ORB on mvod-synth's turn never had enough on a one-frame pair, so it never
- * rebuilt): the reference is the last tracked frame, whose old map points scale the step.
+ * After a loss too (in the VO seam test ORB's one-frame pairs after a loss never had enough, and
+ * two-view steps chained on): the reference is the last tracked frame, whose old map points
+ * scale the step.
  */
 static void hold_translation(struct mvod_vo *vo, struct mvod_vo_result *res)
 {
