@@ -24,7 +24,8 @@ extern "C" {
 enum mvod_track_state {
 	MVOD_STATE_INITIALIZING = 1, /* no motion estimated yet */
 	MVOD_STATE_TRACKING = 2,
-	MVOD_STATE_LOST = 3,         /* the last frame could not be tracked; pose held */
+	/* The last frame could not be tracked, pose held; map mode: until a lost map is rebuilt. */
+	MVOD_STATE_LOST = 3,
 };
 
 /* Where the length of a translation step came from. */

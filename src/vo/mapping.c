@@ -135,8 +135,11 @@ static void start_tracking(struct mvod_mapvo *mv, mvod_map_id a, mvod_map_id b)
 }
 
 /*
- * The first map waits for parallax: a step with too few well-triangulated points keeps only
- * its rotation (as a rotation-only frame does), so the reference stays and the baseline grows.
+ * A map waits for parallax: a step with too few well-triangulated points keeps only its
+ * rotation (as a rotation-only frame does), so the reference stays and the baseline grows.
+ * After a loss too (in the VO seam test ORB's one-frame pairs after a loss never had enough, and
+ * two-view steps chained on): the reference is the last tracked frame, whose old map points
+ * scale the step.
  */
 static void hold_translation(struct mvod_vo *vo, struct mvod_vo_result *res)
 {
@@ -148,7 +151,8 @@ static void hold_translation(struct mvod_vo *vo, struct mvod_vo_result *res)
 	res->status = MVOD_FRAME_ROTATION;
 	res->scale_source = MVOD_SCALE_NONE;
 	res->step_m = 0;
-	vo->have_step = 0; /* the map's first step is still to define the unit */
+	if (!vo->mapvo->had_map)
+		vo->have_step = 0; /* the map's first step is still to define the unit */
 }
 
 int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
@@ -160,8 +164,7 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
 	for (int i = 0; i < n; i++)
 		good += vo->cur->has_pt[vo->matches[i].b];
 	if (good < INIT_MIN_POINTS) {
-		if (!mv->had_map)
-			hold_translation(vo, res);
+		hold_translation(vo, res);
 		return 0;
 	}
 	mvod_map_reset(mv->map);
@@ -182,6 +185,7 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
 		return ret;
 	start_tracking(mv, a, b);
 	mv->had_map = true;
+	mv->lost = false;
 	res->keyframe = true;
 	return 1;
 }

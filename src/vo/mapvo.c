@@ -124,6 +124,7 @@ void mvod_mapvo_reset(struct mvod_mapvo *mv)
 		return;
 	mvod_map_reset(mv->map);
 	mv->active = false;
+	mv->lost = false;
 }
 
 /* The VO's keypoints in the map's form. */
@@ -251,17 +252,39 @@ static void set_pose(struct mvod_mapvo *mv, const double R[9], const double t[3]
 	memcpy(mv->tcw, t, sizeof(mv->tcw));
 }
 
+/*
+ * The map's points the frame tracks, in its camera (map units), as the two-view algorithm's
+ * structure: a step after a loss takes its length from them (the old map's scale), not from
+ * the last speed.
+ */
+static void keep_structure(struct mvod_vo *vo)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	struct frame_slot *cur = vo->cur;
+	for (int j = 0; j < cur->f.n; j++) {
+		const struct mvod_map_point *p = mvod_map_point(mv->map, mv->cur_pt[j]);
+		cur->has_pt[j] = p != NULL;
+		if (!p)
+			continue;
+		double *c = cur->pts + 3 * j;
+		mvod_mat3_vec(mv->Rcw, p->pos, c);
+		for (int k = 0; k < 3; k++)
+			c[k] += mv->tcw[k];
+	}
+}
+
 /* The tracked frame becomes the reference; the point ids of its keypoints go with it. */
 static void promote_tracked(struct mvod_vo *vo, const double *gt)
 {
 	struct mvod_mapvo *mv = vo->mapvo;
+	keep_structure(vo);
 	mvod_map_id *k = mv->ref_pt;
 	mv->ref_pt = mv->cur_pt;
 	mv->cur_pt = k;
 	struct mvod_map_obs *first = mv->ref_first;
 	mv->ref_first = mv->cur_first;
 	mv->cur_first = first;
-	mvod_vo_promote(vo, gt, false);
+	mvod_vo_promote(vo, gt, true);
 	if (vo->klt)
 		mvod_klt_promote(vo->klt);
 }
@@ -391,6 +414,7 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 	if (k < vo->p.min_matches) {
 		/* Lost: the two-view algorithm takes this frame from the reference. */
 		mvod_mapvo_reset(mv);
+		mv->lost = true;
 		return 0;
 	}
 	ret = accept(vo, np, mv->n_pairs, R, t, gt, res);

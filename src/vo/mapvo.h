@@ -4,8 +4,8 @@
  * Until a map exists (and again after the map is lost) frames go through the two-view
  * algorithm, which keeps the pose chain going; the first two-view MOTION step with enough
  * well-triangulated points builds the map from its two frames, so the map's unit is that step's
- * length (the unit, the ground truth's with --scale gt, or the last speed after a loss: the
- * scale carries over). From then on each frame's pose comes from the map (mapvo.c: predict,
+ * length (the unit, the ground truth's with --scale gt; after a loss the old map's, through the
+ * map points the last tracked frame saw, else the last speed: the scale carries over). From then on each frame's pose comes from the map (mapvo.c: predict,
  * match by projection, pose-only refinement, PnP-RANSAC to re-find) and some frames become
  * keyframes (mapping.c: triangulation against the window, culling, windowed BA).
  *
@@ -58,7 +58,8 @@ struct mvod_mapvo {
 	mvod_map_id *kfs; /* [kf_cap] the window's keyframes */
 	/* State. */
 	bool active;           /* a map exists and the last frames tracked against it */
-	bool had_map;          /* a map existed: later ones carry its scale (the last speed) */
+	bool had_map;          /* a map existed: later ones carry its scale */
+	bool lost;             /* the map was lost, a new one is being built: state LOST */
 	double Rcw[9], tcw[3]; /* the last tracked frame, camera from world */
 	double vR[9], vt[3];   /* its motion from the frame before (constant-velocity model) */
 	int since_kf;          /* frames since the last keyframe */
@@ -79,16 +80,18 @@ void mvod_mapvo_reset(struct mvod_mapvo *mv);
 /*
  * Tracks the current slot against the map when one is active. Returns 1 when the frame was
  * handled (res filled: pose, status, state); 0 when there is no map or it was just lost (the
- * map is reset, and the caller runs the two-view algorithm from the reference frame, whose
- * scale falls back to the last step: the pose does not jump); -errno on a real failure.
+ * map is reset, and the caller runs the two-view algorithm from the reference frame, the last
+ * tracked one, whose map points in its camera are the step's structure to scale by: the pose
+ * does not jump); -errno on a real failure.
  */
 int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res);
 
 /*
  * After a two-view estimate, before the frame settles: when it was a MOTION step with enough
  * well-triangulated points, builds the map from the step's two frames (vo->ref and vo->cur,
- * at vo->pose) and returns 1; else 0. Before the first map, a MOTION step without enough
- * becomes a rotation-only frame (translation held) so that parallax builds up.
+ * at vo->pose) and returns 1; else 0. A MOTION step without enough becomes a rotation-only
+ * frame (translation held) so that parallax builds up against the kept reference (before
+ * the first map, and after a loss: the last tracked frame, with the old map's points).
  */
 int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
 

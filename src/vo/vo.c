@@ -426,7 +426,6 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 		if (handled)
 			return handled < 0 ? handled : 0;
 	}
-	vo->cur->seq = vo->frames++;
 	int n = vo->cur->f.n;
 	const struct frame_slot *tracked = vo->cur;
 	bool matched = false; /* enough matches against the reference to estimate motion */
@@ -456,7 +455,9 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 		mvod_klt_promote(vo->klt);
 	/* Map mode: TRACKING means against a map; two-view frames only keep the pose going. */
 	if (vo->mapvo) {
-		vo->state = made_map ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING;
+		vo->state = made_map	      ? MVOD_STATE_TRACKING
+			    : vo->mapvo->lost ? MVOD_STATE_LOST
+					      : MVOD_STATE_INITIALIZING;
 		map_counts(vo, res);
 	}
 	res->pose = vo->pose;
@@ -468,11 +469,12 @@ static int track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 }
 
 /* What both entry points check and clear first. */
-static int begin(const struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
+static int begin(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
 {
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT && !gt)
 		return -EINVAL;
 	memset(res, 0, sizeof(*res));
+	vo->cur->seq = vo->frames++;
 	return 0;
 }
 

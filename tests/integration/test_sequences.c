@@ -423,7 +423,8 @@ static double map_no_jump(const struct run *r, const struct mvod_traj *gt, doubl
 /*
  * Frames first .. 59 after a map loss at frame first: every frame not TRACKING that is not a
  * motion step holds the pose; TRACKING frames are steps against the map (scale source MAP) or
- * the constant-speed step of a re-initialisation; the last frame not TRACKING is before back.
+ * the step that rebuilt it (scaled by the old map's points the held frame saw, STRUCTURE, else
+ * CONSTANT_SPEED); the last frame not TRACKING is before back.
  */
 static void map_recovers(const struct run *r, int first, int back)
 {
@@ -435,7 +436,8 @@ static void map_recovers(const struct run *r, int first, int back)
 			if (p->frame_status != MVOD_POSE_T_FRAME_MOTION)
 				assert_memory_equal(p->position, r->pose[i - 1].position,
 						    sizeof(p->position));
-		} else if (p->scale_source != MVOD_POSE_T_SCALE_CONSTANT_SPEED) {
+		} else if (p->scale_source != MVOD_POSE_T_SCALE_CONSTANT_SPEED &&
+			   p->scale_source != MVOD_POSE_T_SCALE_STRUCTURE) {
 			expect_pose(r, i, MVOD_POSE_T_FRAME_MOTION, MVOD_POSE_T_STATE_TRACKING,
 				    MVOD_POSE_T_SCALE_MAP);
 		}

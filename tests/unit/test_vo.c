@@ -539,8 +539,12 @@ static struct mvod_vo_result feed_unmatchable(struct mvod_vo *vo)
  * frame 5 builds the map (unit step, keyframe, points) and tracking goes on against it (scale
  * source MAP). Frames 20-22 with 20 features: LOST, pose and map held, and frame 23 is tracked
  * against the kept map, catching up the 4 steps travelled. Frame 30's descriptors match
- * nothing: the map is dropped (INITIALIZING, pose held); the re-initialised two-view chain's
- * first step (frame 32: frame 31 is matched against frame 30) carries the last speed.
+ * nothing: the map is dropped and the state is LOST (a map existed: LOST, not INITIALIZING,
+ * until a new one is made), the pose held. Frame 31 matches nothing either (frame 30 is the
+ * reference); frames 32 and 33 have too little parallax against frame 31 for a new map, so
+ * their translation is held (ROTATION, LOST) and the reference stays while the baseline grows;
+ * frame 34 builds the new map against frame 31, its step the last speed times the 3 frames it
+ * spans (no structure is shared with frame 31), and the rebuilt map carries the old one's scale.
  */
 static void test_map_states(void **state)
 {
@@ -570,20 +574,34 @@ static void test_map_states(void **state)
 	}
 	last = map_tracks(vo, 23, 30, &moved, s, &worst);
 	r = feed_unmatchable(vo);
-	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_INITIALIZING);
+	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_LOST);
 	assert_int_equal(r.map_points, 0);
 	assert_pose_equal(&r.pose, &last.pose);
 	struct mvod_pose p = map_pose(31);
 	r = feed(vo, &p);
-	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_INITIALIZING);
+	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_LOST);
 	assert_pose_equal(&r.pose, &last.pose);
-	p = map_pose(32);
+	for (int i = 32; i < 34; i++) {
+		p = map_pose(i);
+		r = feed(vo, &p);
+		assert_frame(&r, MVOD_FRAME_ROTATION, MVOD_STATE_LOST);
+		assert_memory_equal(r.pose.t, last.pose.t, sizeof(r.pose.t));
+		assert_int_equal(r.map_points, 0);
+	}
+	p = map_pose(34);
 	r = feed(vo, &p);
-	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_INITIALIZING);
+	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
 	assert_int_equal(r.scale_source, MVOD_SCALE_CONSTANT_SPEED);
-	/* The last step's length, copied: equal but for the pose chain's rounding (~1e-16). */
-	assert_true(fabs(r.step_m - last.step_m) < 1e-12);
-	assert_no_jump(&r, &moved, 32, s, &worst);
+	assert_true(r.keyframe && r.map_points >= 100);
+	/* 3 times the last step, copied: equal but for the pose chain's rounding (~1e-16). */
+	assert_true(fabs(r.step_m - 3 * last.step_m) < 1e-12);
+	assert_no_jump(&r, &moved, 34, s, &worst);
+	moved = p;
+	for (int i = 35; i < 40; i++) {
+		struct mvod_vo_result t = map_tracks(vo, i, i + 1, &moved, s, &worst);
+		/* The old map's scale: within 1 %, as assert_no_jump (one frame's step was 1/3). */
+		assert_true(t.step_m > 0.99 * s * 0.25);
+	}
 	print_message("map mode: worst step / true step %.6f\n", worst);
 	mvod_vo_destroy(vo);
 }
