@@ -281,9 +281,7 @@ static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const do
 	set_pose(mv, R, t);
 	mv->since_kf++;
 	if (inliers < KF_SHARE * mv->kf_tracked) {
-		int ret = mvod_mapscale_keyframe(vo);
-		if (!ret)
-			ret = mvod_mapping_keyframe(vo, &res->keyframe);
+		int ret = mvod_mapping_keyframe(vo, &res->keyframe);
 		if (ret)
 			return ret;
 	}

@@ -120,12 +120,13 @@ int mvod_mapping_ba_poll(struct mvod_mapvo *mv);
 int mvod_mapping_ba_settle(struct mvod_mapvo *mv);
 
 /*
- * --scale height (mapscale.c), at a keyframe before mapping: measures the camera's height over
- * the road band among the frame's tracked points and, when the filtered scale says the map's
- * unit has drifted, rescales the map about the current camera (about the origin at the first
- * measurement). Lands any running bundle adjustment first. 0 or -errno.
+ * --scale height (mapscale.c), at keyframe kf, after its triangulation and before bundle
+ * adjustment: lands any running bundle adjustment, measures the camera's height over the road
+ * band among the points kf observes and, when the filtered scale says the map's unit has
+ * drifted, rescales the map about the current camera (about the origin at the first
+ * measurement). 0 or -errno.
  */
-int mvod_mapscale_keyframe(struct mvod_vo *vo);
+int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf);
 
 /* Pixel sigma of a keypoint on pyramid level octave: ORB's scale step 1.2 per level. */
 double mvod_mapvo_sigma(int octave);
