@@ -112,6 +112,21 @@ static void test_height(void **state)
 	assert_true(count_source("height", MVOD_POSE_T_SCALE_HEIGHT) > FRAMES / 2);
 }
 
+/*
+ * Map mode: the map's unit comes from the first two-view step, then mapscale.c rescales the
+ * map from the road band's height at keyframes; the path is metric without any alignment.
+ */
+static void test_height_map(void **state)
+{
+	(void)state;
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "heightmap", "--scale", "height", "--camera-height", "1.6", "--mode", "map");
+	metric_errors(&r, "heightmap", &e);
+	/* BOUND: measured first */
+	assert_true(e.ate_m < 0.03 * e.length_m);
+}
+
 static void test_external(void **state)
 {
 	(void)state;
@@ -243,6 +258,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_height),
+		cmocka_unit_test(test_height_map),
 		cmocka_unit_test(test_external),
 		cmocka_unit_test(test_external_speed_stops),
 		cmocka_unit_test(test_bad_heights),
