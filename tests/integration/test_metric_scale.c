@@ -123,7 +123,11 @@ static void test_height_map(void **state)
 	struct traj_errors e;
 	run_mvod(&r, "heightmap", "--scale", "height", "--camera-height", "1.6", "--mode", "map");
 	metric_errors(&r, "heightmap", &e);
-	/* BOUND: measured first */
+	/*
+	 * 0.75 % measured (0.089 m over 11.8 m; the map's first unit, the first two-view step, is
+	 * rescaled by the height); 3 %: the issue's bound for a whole drive. A map left in its
+	 * first unit, or rescaled with the old unit written back by BA, is off by far more.
+	 */
 	assert_true(e.ate_m < 0.03 * e.length_m);
 }
 
