@@ -118,6 +118,18 @@ int mvod_map_add_keyframe(struct mvod_map *m, const struct mvod_map_kf_in *in, m
 const struct mvod_map_keyframe *mvod_map_keyframe(const struct mvod_map *m, mvod_map_id id);
 int mvod_map_set_pose(struct mvod_map *m, mvod_map_id kf, const double Rcw[9],
 		      const double tcw[3]);
+/*
+ * A camera-from-world pose whose world is scaled by s about centre (world frame): the camera's
+ * centre c goes to centre + s (c - centre), its rotation stays; tcw becomes
+ * s tcw + (s - 1) Rcw centre.
+ */
+void mvod_map_scale_pose(const double Rcw[9], double tcw[3], const double centre[3], double s);
+/*
+ * Scales the whole map by s (> 0) about centre (world frame): every point and every keyframe's
+ * centre moves to centre + s (X - centre); observations and rotations stay (a map's unit is
+ * free: its reprojections do not change). -EINVAL for s not finite and positive.
+ */
+int mvod_map_rescale(struct mvod_map *m, const double centre[3], double s);
 /* The window's keyframes, oldest first; returns how many (<= cap). */
 int mvod_map_keyframes(const struct mvod_map *m, mvod_map_id *ids, int cap);
 int mvod_map_n_keyframes(const struct mvod_map *m);

@@ -353,7 +353,9 @@ int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added)
 	if (ret)
 		return ret;
 	mvod_map_cull(mv->map, NULL);
-	ret = mvod_mapping_ba(mv);
+	ret = mvod_mapscale_keyframe(vo, kf);
+	if (!ret)
+		ret = mvod_mapping_ba(mv);
 	if (ret)
 		return ret;
 	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);

@@ -126,11 +126,16 @@ static int land(struct mvod_mapvo *mv, bool wait)
  * first: skipping instead left the first keyframes of KITTI 07 (frames 18, 25, 29, in its
  * opening turn) unrefined, and its scale drift went from 1.38 (inline) to 5.3; waiting, 2.3.
  */
+int mvod_mapping_ba_settle(struct mvod_mapvo *mv)
+{
+	return mv->bat && !mvod_ba_thread_job(mv->bat) ? land(mv, true) : 0;
+}
+
 int mvod_mapping_ba(struct mvod_mapvo *mv)
 {
 	if (!mv->bat)
 		return 0;
-	int ret = mvod_ba_thread_job(mv->bat) ? 0 : land(mv, true);
+	int ret = mvod_mapping_ba_settle(mv);
 	if (ret)
 		return ret;
 	struct mvod_ba_job *j = mvod_ba_thread_job(mv->bat);

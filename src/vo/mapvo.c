@@ -125,6 +125,7 @@ void mvod_mapvo_reset(struct mvod_mapvo *mv)
 	mvod_map_reset(mv->map);
 	mv->active = false;
 	mv->lost = false;
+	mv->unit_log = 0;
 }
 
 /* The VO's keypoints in the map's form. */

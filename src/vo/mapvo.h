@@ -64,6 +64,11 @@ struct mvod_mapvo {
 	double vR[9], vt[3];   /* its motion from the frame before (constant-velocity model) */
 	int since_kf;          /* frames since the last keyframe */
 	int kf_tracked;        /* points tracked into the last keyframe (before it triangulated) */
+	/*
+	 * --scale height: log of the metres per map unit the filtered height measures (0: the
+	 * map is metric, or as metric as the chain it was built from).
+	 */
+	double unit_log;
 };
 
 /*
@@ -113,6 +118,18 @@ int mvod_mapping_ba(struct mvod_mapvo *mv);
  * whatever the machine's speed: runs are reproducible. The solver's error, else 0.
  */
 int mvod_mapping_ba_poll(struct mvod_mapvo *mv);
+
+/* Waits for a posted bundle adjustment and lands it: none runs on the map after this. */
+int mvod_mapping_ba_settle(struct mvod_mapvo *mv);
+
+/*
+ * --scale height (mapscale.c), at keyframe kf, after its triangulation and before bundle
+ * adjustment: lands any running bundle adjustment, measures the camera's height over the road
+ * band among the points kf observes and, when the filtered scale says the map's unit has
+ * drifted, rescales the map about the current camera (about the origin at the first
+ * measurement). 0 or -errno.
+ */
+int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf);
 
 /* Pixel sigma of a keypoint on pyramid level octave: ORB's scale step 1.2 per level. */
 double mvod_mapvo_sigma(int octave);

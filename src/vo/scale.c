@@ -104,11 +104,13 @@ static bool refit_normal(const double *X, int n, const double prior[3], struct m
 	}
 	double U[9], S[3], Vt[9];
 	memcpy(g->n, prior, sizeof(g->n));
+	g->inliers = m;
 	if (mvod_svd3(C, U, S, Vt) != 0 || S[1] < GROUND_AREA * GROUND_AREA * S[0])
 		return false;
 	double sign = dot3(Vt + 6, prior) < 0 ? -1.0 : 1.0;
 	for (int k = 0; k < 3; k++)
 		g->n[k] = sign * Vt[6 + k];
+	g->h = dot3(g->n, c);
 	return true;
 }
 
@@ -152,12 +154,7 @@ int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inlie
 	double h = best_pitch(X, n, prior, min_inliers > 3 ? min_inliers : 3, scratch, np);
 	if (h <= 0)
 		return -ENODATA;
-	int m = heights(X, n, np, scratch), k = 0;
-	for (int i = 0; i < m; i++)
-		if (fabs(scratch[i] - h) < GROUND_BAND * h)
-			scratch[k++] = scratch[i];
-	g->h = mvod_median(scratch, k);
-	g->inliers = k;
+	g->h = h;
 	return refit_normal(X, n, np, g) ? 0 : -ENODATA;
 }
 
@@ -184,7 +181,7 @@ void mvod_ground_normal(double pitch_deg, double roll_deg, double n[3])
 void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate)
 {
 	*f = (struct mvod_scale_filter){.gain = gain, .gate = gate, .since = -1,
-					.ground_n = {0, 1, 0}};
+					.ground_n = {0, 1, 0}, .first_n = 1};
 }
 
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
@@ -195,8 +192,14 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
 		f->since++;
 	if (!(isfinite(ratio) && ratio > 0))
 		return 1.0;
-	double r = log(ratio);
 	bool first = f->since < 0;
+	if (first) {
+		f->first[f->n_first++] = ratio;
+		if (f->n_first < f->first_n)
+			return 1.0;
+		ratio = mvod_median(f->first, f->n_first);
+	}
+	double r = log(ratio);
 	/* Doubling: a scale that structure ran away with (1e13 on mvod-synth's 3.7 km KITTI 00
 	 * path at a linear widening) is caught within a few dozen refusals. */
 	if (!first && fabs(r) > ldexp(f->gate, f->refused < 60 ? f->refused : 60)) {
@@ -208,6 +211,19 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
 	f->quality = quality;
 	*used = true;
 	return first ? ratio : exp(f->gain * r);
+}
+
+double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int n,
+			       double height_m, double *scratch, double *q)
+{
+	struct mvod_ground g;
+	*q = 0;
+	if (mvod_ground_fit(X, n, f->ground_n, MVOD_GROUND_MIN_INLIERS, scratch, &g) != 0)
+		return NAN;
+	mvod_ground_prior_update(f->ground_n, &g);
+	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
+	*q = g.inliers / (g.inliers + 20.0);
+	return height_m / g.h;
 }
 
 bool mvod_scale_filter_metric(const struct mvod_scale_filter *f)

@@ -74,6 +74,7 @@ bool mvod_quad_contains(const float quad[8], float x, float y);
  * (one bad frame: a car's roof taken for the road) is refused, the gate widening with each
  * refusal in a row so that a real change is followed within a few frames.
  */
+#define MVOD_SCALE_FIRST_MAX 5
 struct mvod_scale_filter {
 	double gain;    /* fraction of a measurement's log ratio applied, (0, 1] */
 	double gate;    /* largest |log ratio| accepted; INFINITY = all */
@@ -82,6 +83,14 @@ struct mvod_scale_filter {
 	int refused;    /* measurements refused in a row */
 	double ground_n[3]; /* --scale height: the ground's expected normal in the camera frame
 			       (the mount's pitch and roll), from (0, 1, 0) on */
+	/*
+	 * The first scale is the median of this many measurements (1 at init, at most
+	 * MVOD_SCALE_FIRST_MAX); until then the output is not metric. Their ratios are alike:
+	 * metres per unit of the same chain, which structure carries between them.
+	 */
+	int first_n;
+	int n_first;
+	double first[MVOD_SCALE_FIRST_MAX];
 };
 void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate);
 /*
@@ -91,6 +100,19 @@ void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gat
  */
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
 			      bool *used);
+/*
+ * Fewer ground points than this give no height: three points always span a plane, and a
+ * patch of road under a car's bonnet on KITTI has 15-60 of them.
+ */
+#define MVOD_GROUND_MIN_INLIERS 20
+/*
+ * --scale height's measurement: the ground among the n road-band points X (n x 3, camera
+ * frame, any unit), fitted along f's expected normal, which then learns from it. Returns
+ * height_m over the fitted height (metres per unit of X), NAN when no ground was found; *q
+ * the fit's quality (0-1). scratch holds n doubles.
+ */
+double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int n,
+			       double height_m, double *scratch, double *q);
 /* Whether any measurement was accepted yet (the output is metric). */
 bool mvod_scale_filter_metric(const struct mvod_scale_filter *f);
 /* 0-1: the last measurement's quality, decaying by MVOD_SCALE_DECAY per step without one. */

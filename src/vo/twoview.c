@@ -73,12 +73,6 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
 	return mvod_motion_relative_scale(vo->prev_pts, vo->cur_pts, m, 10, vo->scratch, s);
 }
 
-/*
- * Fewer ground points than this give no height: three points always span a plane, and a
- * patch of road under a car's bonnet on KITTI has 15-60 of them.
- */
-#define GROUND_MIN_INLIERS 20
-
 /* This step's length in metres, NAN when not measured; *q its quality (0-1). */
 static double measured_step(struct mvod_vo *vo, int n, double *q)
 {
@@ -87,8 +81,7 @@ static double measured_step(struct mvod_vo *vo, int n, double *q)
 		return fabs(vo->cur->odo - vo->ref->odo);
 	/* The road band's structure in the reference's frame, unit baseline: h in baselines. */
 	float quad[8];
-	if (mvod_ground_band_quad(vo->scale.ground_n, vo->cam.fx, vo->cam.fy, vo->cam.cx,
-				  vo->cam.cy, quad) != 0)
+	if (mvod_vo_band_quad(vo, quad) != 0)
 		return NAN;
 	int m = 0;
 	for (int i = 0; i < n; i++) {
@@ -100,25 +93,25 @@ static double measured_step(struct mvod_vo *vo, int n, double *q)
 		X[1] = vo->x1[2 * i + 1] * vo->depth[i];
 		X[2] = vo->depth[i];
 	}
-	struct mvod_ground g;
-	if (mvod_ground_fit(vo->prev_pts, m, vo->scale.ground_n, GROUND_MIN_INLIERS, vo->scratch,
-			    &g) != 0)
-		return NAN;
-	mvod_ground_prior_update(vo->scale.ground_n, &g);
-	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
-	*q = g.inliers / (g.inliers + 20.0);
-	return vo->p.camera_height_m / g.h;
+	return mvod_scale_height_ratio(&vo->scale, vo->prev_pts, m, vo->p.camera_height_m,
+				       vo->scratch, q);
 }
 
-/* --scale height, external: the prediction s corrected by this step's measurement. */
+/*
+ * --scale height, external: the prediction s corrected by this step's measurement. The first
+ * measurement also rescales the chain so far about the world's origin (the first camera): its
+ * steps were in the unit s is in, and none of its positions was published (vo.c holds them).
+ */
 static double metric_step(struct mvod_vo *vo, int n, double s, enum mvod_scale_source *src)
 {
 	double q, m = measured_step(vo, n, &q);
-	bool used;
+	bool used, was_metric = mvod_scale_filter_metric(&vo->scale);
 	double f = mvod_scale_filter_step(&vo->scale, m / s, q, &used);
 	if (used)
 		*src = vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL ? MVOD_SCALE_EXTERNAL
 								   : MVOD_SCALE_HEIGHT;
+	for (int k = 0; k < 3 && used && !was_metric; k++)
+		vo->ref->pose.t[k] *= f;
 	return s * f;
 }
 

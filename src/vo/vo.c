@@ -28,6 +28,12 @@
  */
 #define HEIGHT_GAIN 0.5
 #define HEIGHT_GATE 0.22 /* log(1.25) */
+/*
+ * --scale height: the first scale is the median of this many measurements (the output held
+ * until then). One measurement on KITTI 07's opening creep scattered 30 % and set the unit of
+ * all that came before: taken whole, the first published position jumped to 1.39 m for 1.07 m.
+ */
+#define HEIGHT_FIRST 3
 
 const char *const mvod_stage_names[MVOD_STAGE_COUNT] = {"capture", "preprocess", "detect", "match",
 							 "pose"};
@@ -284,6 +290,7 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 		mvod_scale_filter_init(&vo->scale, 1.0, INFINITY);
 	else
 		mvod_scale_filter_init(&vo->scale, HEIGHT_GAIN, HEIGHT_GATE);
+	vo->scale.first_n = params->scale_mode == MVOD_SCALE_MODE_HEIGHT ? HEIGHT_FIRST : 1;
 	mount(vo, cam);
 	*out = vo;
 	return 0;
@@ -371,14 +378,27 @@ bool mvod_scale_mode_metric(enum mvod_scale_mode m)
 	       m == MVOD_SCALE_MODE_EXTERNAL;
 }
 
-/* The output's metres per unit (1 once metric, 0 while unknown) and its confidence. */
+/*
+ * The output's metres per unit (1 once metric, 0 while unknown) and its confidence. With
+ * --scale height or external, until the first measurement the position is held at the origin
+ * (source NONE, scale 0): the steps so far have no known unit (KITTI 07 creeps 8 frames at
+ * 0.1 m a step as 1.0 "m" steps before the road is measured). The chain goes on unpublished
+ * and the first measurement rescales it (twoview.c, mapscale.c): published poses are never
+ * rewritten (the output policy), the position jumps once, to the metric one.
+ */
 static void report_scale(const struct mvod_vo *vo, struct mvod_vo_result *res)
 {
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT) {
 		res->scale = res->scale_confidence = 1.0;
 	} else if (vo->p.scale_mode != MVOD_SCALE_MODE_AUTO) {
-		res->scale = mvod_scale_filter_metric(&vo->scale) ? 1.0 : 0.0;
+		bool metric = mvod_scale_filter_metric(&vo->scale);
+		res->scale = metric ? 1.0 : 0.0;
 		res->scale_confidence = mvod_scale_filter_confidence(&vo->scale);
+		if (metric)
+			return;
+		memset(res->pose.t, 0, sizeof(res->pose.t));
+		res->scale_source = MVOD_SCALE_NONE;
+		res->step_m = 0;
 	}
 }
 
@@ -410,6 +430,7 @@ static int map_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 	map_counts(vo, res);
 	res->pose = vo->pose;
 	res->state = vo->state;
+	report_scale(vo, res);
 	res->ms[MVOD_STAGE_POSE] = 1e3 * mvod_now_s() - t0;
 	return 1;
 }
@@ -478,20 +499,24 @@ static int begin(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 	return 0;
 }
 
+int mvod_vo_band_quad(const struct mvod_vo *vo, float quad[8])
+{
+	return mvod_ground_band_quad(vo->scale.ground_n, vo->cam.fx, vo->cam.fy, vo->cam.cx,
+				     vo->cam.cy, quad);
+}
+
 /*
  * --scale height with KLT: a share of the tracks on the road band (scale.h), whose smooth
  * asphalt the tracker's own detection leaves almost bare (KITTI 06: one step in 50 found
  * 20 ground points).
  */
-#define BAND_SHARE 5     /* a fifth of max_tracks */
+#define BAND_SHARE 3     /* a third of max_tracks (see BENCHMARKS.md, issue 14) */
 #define BAND_FAST 10     /* FAST contrast on the band, grey levels */
 static int klt_track(struct mvod_vo *vo, const struct mvod_image *grey)
 {
 	int ret = mvod_klt_track(vo->klt, grey, &vo->cur->f, vo->matches, &vo->klt_matches);
 	float quad[8];
-	if (ret || vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT ||
-	    mvod_ground_band_quad(vo->scale.ground_n, vo->cam.fx, vo->cam.fy, vo->cam.cx,
-				  vo->cam.cy, quad) != 0)
+	if (ret || vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT || mvod_vo_band_quad(vo, quad) != 0)
 		return ret;
 	return mvod_klt_reserve(vo->klt, grey, quad, vo->p.max_tracks / BAND_SHARE, BAND_FAST,
 				&vo->cur->f);

@@ -47,6 +47,9 @@ struct mvod_vo {
 	struct mvod_scale_filter scale; /* --scale height, external */
 };
 
+/* --scale height: the road band (scale.h) in the image, along the expected ground normal. */
+int mvod_vo_band_quad(const struct mvod_vo *vo, float quad[8]);
+
 /*
  * The current frame becomes the reference. Its structure (from a motion step) is what the next
  * step scales against; without one, the next step falls back to constant speed.

@@ -16,6 +16,7 @@
 
 #include "mvod/geom.h"
 #include "mvod/vo.h"
+#include "vo/map.h"
 #include "vo/scale.h"
 #include "vo/vo_seam.h"
 
@@ -164,6 +165,60 @@ static void test_filter(void **state)
 	assert_true(mvod_scale_filter_step(&f, INFINITY, 1, &used) == 1.0 && !used);
 }
 
+/* first_n 3: held (factor 1, not metric) until 3 measurements, then their median whole. */
+static void test_filter_first_median(void **state)
+{
+	(void)state;
+	struct mvod_scale_filter f;
+	bool used;
+	mvod_scale_filter_init(&f, 0.5, log(1.25));
+	f.first_n = 3;
+	assert_true(mvod_scale_filter_step(&f, 2.0, 1, &used) == 1.0 && !used);
+	assert_true(mvod_scale_filter_step(&f, NAN, 1, &used) == 1.0 && !used);
+	assert_true(mvod_scale_filter_step(&f, 0.5, 1, &used) == 1.0 && !used);
+	assert_false(mvod_scale_filter_metric(&f));
+	assert_true(mvod_scale_filter_step(&f, 0.9, 1, &used) == 0.9 && used);
+	assert_true(mvod_scale_filter_metric(&f));
+}
+
+/*
+ * The map scaled by 2 about a centre: points and keyframe centres move away from it twice as
+ * far, rotations stay, and a point's projection in a keyframe does not change (exact
+ * arithmetic on small numbers: 1e-12).
+ */
+static void test_map_rescale(void **state)
+{
+	(void)state;
+	struct mvod_map_params mp;
+	mvod_map_params_default(&mp);
+	mp.kf_cap = 3, mp.kp_cap = 4, mp.point_cap = 8;
+	struct mvod_map *m;
+	assert_int_equal(mvod_map_create(&m, &mp), 0);
+	const double c = cos(0.3), s = sin(0.3), centre[3] = {1, 0, 2};
+	struct mvod_map_kf_in in = {.Rcw = {c, 0, s, 0, 1, 0, -s, 0, c}, .tcw = {0.5, -0.2, 1}};
+	mvod_map_id kf, pt;
+	assert_int_equal(mvod_map_add_keyframe(m, &in, &kf, NULL), 0);
+	const double X[3] = {3, 1, 9};
+	uint8_t desc[MVOD_MAP_DESC_BYTES] = {0};
+	assert_int_equal(mvod_map_add_point(m, X, desc, kf, &pt), 0);
+	double before[3], after[3];
+	const struct mvod_map_keyframe *k = mvod_map_keyframe(m, kf);
+	mvod_mat3_vec(k->Rcw, X, before);
+	for (int i = 0; i < 3; i++)
+		before[i] += k->tcw[i];
+	assert_int_equal(mvod_map_rescale(m, centre, 2.0), 0);
+	const double *P = mvod_map_point(m, pt)->pos;
+	mvod_mat3_vec(k->Rcw, P, after);
+	for (int i = 0; i < 3; i++) {
+		after[i] += k->tcw[i];
+		assert_true(fabs(P[i] - (centre[i] + 2 * (X[i] - centre[i]))) < 1e-12);
+		assert_true(fabs(after[i] - 2 * before[i]) < 1e-12); /* the same ray, twice as deep */
+	}
+	assert_int_equal(mvod_map_rescale(m, centre, 0), -EINVAL);
+	assert_int_equal(mvod_map_rescale(m, centre, NAN), -EINVAL);
+	mvod_map_destroy(m);
+}
+
 /* ---- the VO through its seam ---- */
 
 #define POINTS 500
@@ -242,7 +297,10 @@ static void test_height_metric_from_first_step(void **state)
 	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_HEIGHT);
 	struct mvod_vo_result res = feed(vo, 0, 0, POINTS);
 	assert_true(res.scale == 0 && res.scale_confidence == 0); /* not known yet */
-	for (int k = 1; k <= 4; k++) {
+	/* The first scale is the median of 3 measurements: held until then. */
+	for (int k = 1; k <= 2; k++)
+		assert_int_equal(feed(vo, 0.8 * k, 0, POINTS).scale_source, MVOD_SCALE_NONE);
+	for (int k = 3; k <= 6; k++) {
 		res = feed(vo, 0.8 * k, 0, POINTS);
 		assert_int_equal(res.status, MVOD_FRAME_MOTION);
 		assert_int_equal(res.scale_source, MVOD_SCALE_HEIGHT);
@@ -255,9 +313,11 @@ static void test_height_metric_from_first_step(void **state)
 }
 
 /*
- * No ground in view (only the points above it): the first step has no scale (the unit),
- * then the ground comes into view and the scale is taken from it; then it goes out of view
- * again and structure keeps the scale, the confidence decaying.
+ * No ground in view (only the points above it): the steps have no known unit, so the position
+ * is held at the origin (source none, scale 0) while the chain goes on; then the ground comes
+ * into view and the first scale is the median of HEIGHT_FIRST (3) measurements, which also
+ * rescales the held chain: the first published position is the true one at once. Then the
+ * ground goes out of view again and structure keeps the scale, the confidence decaying.
  */
 static void test_height_without_ground(void **state)
 {
@@ -266,15 +326,26 @@ static void test_height_without_ground(void **state)
 	feed(vo, 0, GROUND, POINTS - GROUND);
 	struct mvod_vo_result res = feed(vo, 0.8, GROUND, POINTS - GROUND);
 	assert_int_equal(res.status, MVOD_FRAME_MOTION);
-	assert_int_equal(res.scale_source, MVOD_SCALE_UNIT);
+	/* Held: no unit-length step is published as metres. */
+	assert_int_equal(res.scale_source, MVOD_SCALE_NONE);
+	assert_true(res.step_m == 0 && res.pose.t[0] == 0 && res.pose.t[1] == 0 &&
+		    res.pose.t[2] == 0);
 	assert_true(res.scale == 0 && res.scale_confidence == 0);
-	/* The ground in view: the next step, whose reference sees it too, measures it. */
+	/* The ground in view: the steps whose reference sees it too measure it, 2 held more. */
 	feed(vo, 1.6, 0, POINTS);
-	res = feed(vo, 2.4, 0, POINTS);
+	for (int k = 3; k <= 4; k++) {
+		res = feed(vo, 0.8 * k, 0, POINTS);
+		assert_int_equal(res.scale_source, MVOD_SCALE_NONE);
+		assert_true(res.pose.t[2] == 0 && res.scale == 0);
+	}
+	res = feed(vo, 4.0, 0, POINTS);
 	assert_int_equal(res.scale_source, MVOD_SCALE_HEIGHT);
 	assert_true(fabs(res.step_m - 0.8) < 0.8e-3);
+	/* The chain before, rescaled: 5 steps of 0.8 m (float pixels: 0.1 %). */
+	assert_true(fabs(res.pose.t[2] - 4.0) < 4e-3);
+	assert_true(res.scale == 1.0);
 	double conf = res.scale_confidence;
-	for (int k = 4; k <= 6; k++) {
+	for (int k = 6; k <= 8; k++) {
 		res = feed(vo, 0.8 * k, GROUND, POINTS - GROUND);
 		assert_int_equal(res.scale_source, MVOD_SCALE_STRUCTURE);
 		assert_true(fabs(res.step_m - 0.8) < 0.8e-3); /* the last scale, kept */
@@ -303,8 +374,9 @@ static void test_height_from_mount(void **state)
 		double expect = flag ? 0.8 * 0.8 : 0.8;
 		struct mvod_vo *vo =
 			make_vo_on(MVOD_SCALE_MODE_HEIGHT, &mounted, flag ? 0.8 * GROUND_Y : 0);
-		feed(vo, 0, 0, POINTS);
-		struct mvod_vo_result res = feed(vo, 0.8, 0, POINTS);
+		for (int k = 0; k < 3; k++) /* the first scale: the median of 3 */
+			feed(vo, 0.8 * k, 0, POINTS);
+		struct mvod_vo_result res = feed(vo, 2.4, 0, POINTS);
 		assert_int_equal(res.scale_source, MVOD_SCALE_HEIGHT);
 		assert_true(fabs(res.step_m - expect) < 1e-3 * expect);
 		mvod_vo_destroy(vo);
@@ -351,6 +423,8 @@ int main(void)
 		cmocka_unit_test(test_ground_fit_needs_ground),
 		cmocka_unit_test(test_ground_fit_lowest_plane),
 		cmocka_unit_test(test_filter),
+		cmocka_unit_test(test_filter_first_median),
+		cmocka_unit_test(test_map_rescale),
 		cmocka_unit_test(test_height_metric_from_first_step),
 		cmocka_unit_test(test_height_without_ground),
 		cmocka_unit_test(test_height_from_mount),

@@ -1,0 +1,87 @@
+/*
+ * Map mode's metric scale (--scale height): at a keyframe, the camera's height over the road
+ * band among the map points the frame tracks, filtered as two-view mode's steps are
+ * (scale.h), and, when the filtered estimate says the map's unit has drifted, the whole map
+ * rescaled about the current camera. Bundle adjustment is landed first: a solve posted
+ * before the rescale would bring back the old unit when it lands.
+ */
+#include "mapvo.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "mvod/geom.h"
+
+/*
+ * The map is rescaled when the filtered metres per map unit is this far from 1 (log: 2 %): at
+ * 20-40 band points a keyframe's height scatters by +-20 % on KITTI, so the filtered estimate
+ * (gain 0.5) moves by a few per cent between keyframes with no real change; rescaling on that
+ * would only shake the map BA is refining.
+ */
+#define MAP_RESCALE_MIN 0.02
+
+/*
+ * The band's points that keyframe k observes (those it tracked and those it just triangulated:
+ * on KITTI 06 the tracked ones alone were 6-33, too few for a ground of
+ * MVOD_GROUND_MIN_INLIERS), in its camera's frame, map units: metres per map unit.
+ */
+static double band_ratio(struct mvod_vo *vo, const struct mvod_map_keyframe *k, double *q)
+{
+	float quad[8];
+	*q = 0;
+	if (mvod_vo_band_quad(vo, quad) != 0)
+		return NAN;
+	int m = 0;
+	for (int j = 0; j < k->n; j++) {
+		const struct mvod_map_point *p = mvod_map_point(vo->mapvo->map, k->pt[j]);
+		if (!p || !mvod_quad_contains(quad, k->kp[j].x, k->kp[j].y))
+			continue;
+		double *X = vo->prev_pts + 3 * m++;
+		mvod_mat3_vec(k->Rcw, p->pos, X);
+		for (int i = 0; i < 3; i++)
+			X[i] += k->tcw[i];
+	}
+	return mvod_scale_height_ratio(&vo->scale, vo->prev_pts, m, vo->p.camera_height_m,
+				       vo->scratch, q);
+}
+
+/* The map, the tracked frame, its velocity and the published pose scaled by s about c. */
+static int rescale(struct mvod_vo *vo, const double c[3], double s)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	int ret = mvod_map_rescale(mv->map, c, s);
+	if (ret)
+		return ret;
+	mvod_map_scale_pose(mv->Rcw, mv->tcw, c, s);
+	for (int k = 0; k < 3; k++) {
+		mv->vt[k] *= s;
+		vo->pose.t[k] = c[k] + s * (vo->pose.t[k] - c[k]);
+	}
+	mv->unit_log = 0;
+	return 0;
+}
+
+int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	if (vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT)
+		return 0;
+	int ret = mvod_mapping_ba_settle(mv);
+	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);
+	if (ret || !k)
+		return ret;
+	double q, r = band_ratio(vo, k, &q);
+	bool used, was_metric = mvod_scale_filter_metric(&vo->scale);
+	mv->unit_log += log(mvod_scale_filter_step(&vo->scale, r / exp(mv->unit_log), q, &used));
+	if (!used || (was_metric && fabs(mv->unit_log) < MAP_RESCALE_MIN))
+		return 0;
+	/*
+	 * The first measurement rescales about the world's origin: the chain before it was in
+	 * the map's unit and unpublished (vo.c holds it). Later ones about the current camera:
+	 * published poses are never rewritten, the path goes on from where it is.
+	 */
+	double c[3] = {0, 0, 0};
+	if (was_metric)
+		memcpy(c, vo->pose.t, sizeof(c));
+	return rescale(vo, c, exp(mv->unit_log));
+}
