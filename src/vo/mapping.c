@@ -155,12 +155,35 @@ static void hold_translation(struct mvod_vo *vo, struct mvod_vo_result *res)
 		vo->have_step = 0; /* the map's first step is still to define the unit */
 }
 
+/*
+ * After a loss the reference may lie several frames back (held while the baseline grows, or
+ * frames between that were not tracked); a step without structure to scale by is the last
+ * speed times the frames it spans, not one frame's step (which made a rebuilt map 3 times too
+ * small after a 3-frame hold in the seam test). Scales the step's pose and structure by that.
+ */
+static void speed_over_frames(struct mvod_vo *vo, struct mvod_vo_result *res)
+{
+	double k = (double)(vo->cur->seq - vo->ref->seq);
+	if (!vo->mapvo->had_map || res->scale_source != MVOD_SCALE_CONSTANT_SPEED || !(k > 1))
+		return;
+	struct mvod_pose inv, rel;
+	mvod_pose_inverse(&vo->ref->pose, &inv);
+	mvod_pose_compose(&inv, &vo->pose, &rel);
+	for (int i = 0; i < 3; i++)
+		rel.t[i] *= k;
+	mvod_pose_compose(&vo->ref->pose, &rel, &vo->pose);
+	for (int j = 0; j < vo->cur->f.n * 3; j++)
+		vo->cur->pts[j] *= k;
+	res->step_m *= k;
+}
+
 int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
 {
 	struct mvod_mapvo *mv = vo->mapvo;
 	int n = res->matches, good = 0;
 	if (res->status != MVOD_FRAME_MOTION)
 		return 0;
+	speed_over_frames(vo, res);
 	for (int i = 0; i < n; i++)
 		good += vo->cur->has_pt[vo->matches[i].b];
 	if (good < INIT_MIN_POINTS) {

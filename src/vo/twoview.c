@@ -115,13 +115,6 @@ static double metric_step(struct mvod_vo *vo, int n, double s, enum mvod_scale_s
 	return s * f;
 }
 
-/* Frames between the reference and the current frame: 1, or more after rotation frames. */
-static double step_frames(const struct mvod_vo *vo)
-{
-	int64_t k = vo->cur->seq - vo->ref->seq;
-	return k > 0 ? (double)k : 1.0;
-}
-
 static double step_length(struct mvod_vo *vo, int n, const double *gt,
 			  enum mvod_scale_source *src)
 {
@@ -133,13 +126,8 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {
 		*src = MVOD_SCALE_STRUCTURE;
 	} else {
-		/*
-		 * The last speed over the frames this step spans: a reference kept through a
-		 * rotation frame makes a step of two frames or more (mvod-synth forward: taken
-		 * as one, it halved every later step).
-		 */
 		*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
-		s = vo->have_step ? vo->last_step * step_frames(vo) : 1.0;
+		s = vo->have_step ? vo->last_step : 1.0;
 	}
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_AUTO)
 		return s;
@@ -242,7 +230,7 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);
 	res->step_m = s;
-	vo->last_step = s / step_frames(vo);
+	vo->last_step = s;
 	vo->have_step = 1;
 	return MVOD_FRAME_MOTION;
 }

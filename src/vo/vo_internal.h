@@ -18,7 +18,7 @@ struct frame_slot {
 	struct mvod_pose pose; /* camera-to-world */
 	double gt[3]; /* ground-truth position, with --scale gt */
 	double odo;   /* --scale external: odometer at this frame, metres; NAN unknown */
-	int64_t seq;  /* the VO's count of frames when this one came: how many frames a step spans */
+	int64_t seq;  /* the frame's number among those processed (mvod_vo.frames) */
 };
 
 struct mvod_vo {
@@ -40,8 +40,7 @@ struct mvod_vo {
 	enum mvod_track_state state;
 	int64_t frames;     /* frames processed, numbering the slots (seq) */
 	int moving;         /* the last frame was a motion step (twoview.c's hysteresis) */
-	double last_step;   /* length of the last translation step per frame it spanned: the
-			     * speed constant speed assumes, in units a frame */
+	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
 	struct mvod_scale_filter scale; /* --scale height, external */
