@@ -19,15 +19,6 @@
  */
 #define CHEIRALITY_MARGIN 2
 
-/*
- * Hysteresis: a camera that was moving is called still (or only rotating) once its parallax
- * falls below this share of min_parallax_px. A camera moving at about the threshold (mvod-synth
- * forward: 0.98-1.01 px of median parallax a frame with KLT tracks) otherwise flips between
- * motion and rotation, and each rotation frame holds the position a frame. Stopping still
- * reads as rotation: the parallax of a still camera is the tracker's noise, 0.1 px.
- */
-#define MOVING_PARALLAX_SHARE 0.5
-
 static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k, double *x)
 {
 	x[0] = (k->x - c->cx) / c->fx;
@@ -203,8 +194,7 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	struct rotation rot;
 	fit_rotation(vo, n, &rot);
 	bool rot_ok = rot.inliers >= vo->p.min_inliers;
-	double min_px = vo->p.min_parallax_px * (vo->moving ? MOVING_PARALLAX_SHARE : 1.0);
-	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < min_px)
+	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < vo->p.min_parallax_px)
 		return apply_rotation(vo, &rot, res);
 	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
 	double E[9], R1[9], R2[9], tu[3], R[9], t[3];

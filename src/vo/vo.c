@@ -350,7 +350,6 @@ void mvod_vo_promote(struct mvod_vo *vo, const double *gt, bool with_structure)
 static void settle(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res)
 {
 	enum mvod_frame_status st = res->status;
-	vo->moving = st == MVOD_FRAME_MOTION;
 	if (st == MVOD_FRAME_MOTION) {
 		vo->state = MVOD_STATE_TRACKING;
 		mvod_vo_promote(vo, gt, true);

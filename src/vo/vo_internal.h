@@ -39,7 +39,6 @@ struct mvod_vo {
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
 	int64_t frames;     /* frames processed, numbering the slots (seq) */
-	int moving;         /* the last frame was a motion step (twoview.c's hysteresis) */
 	double last_step;   /* length of the last translation step, for constant speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
