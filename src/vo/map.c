@@ -228,8 +228,10 @@ int mvod_map_add_keyframe(struct mvod_map *m, const struct mvod_map_kf_in *in, m
 	memcpy(k->Rcw, in->Rcw, sizeof(k->Rcw));
 	memcpy(k->tcw, in->tcw, sizeof(k->tcw));
 	k->n = in->n;
-	memcpy(k->kp, in->kp, (size_t)in->n * sizeof(*k->kp));
-	memcpy(k->desc, in->desc, (size_t)in->n * MVOD_MAP_DESC_BYTES);
+	if (in->n > 0) { /* a keyframe without keypoints may pass NULL arrays */
+		memcpy(k->kp, in->kp, (size_t)in->n * sizeof(*k->kp));
+		memcpy(k->desc, in->desc, (size_t)in->n * MVOD_MAP_DESC_BYTES);
+	}
 	for (int j = 0; j < in->n; j++)
 		k->pt[j] = MVOD_MAP_NONE;
 	m->kf_n++;
