@@ -26,6 +26,8 @@ void mvod_mat3_mul_bt(const double A[9], const double B[9], double C[9]); /* C =
 void mvod_mat3_mul_at(const double A[9], const double B[9], double C[9]); /* C = A^T B */
 void mvod_mat3_vec(const double A[9], const double v[3], double out[3]);
 void mvod_mat3_tvec(const double A[9], const double v[3], double out[3]); /* A^T v */
+/* out = R X + t: a point moved by a rigid motion (out may be X) */
+void mvod_rigid_apply(const double R[9], const double t[3], const double X[3], double out[3]);
 /*
  * The motion from camera-from-world pose a (Ra, ta) to b (Rb, tb): X_b = R X_a + t, so
  * R = Rb Ra^T and t = tb - R ta. R and t must not alias the inputs.

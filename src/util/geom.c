@@ -46,6 +46,13 @@ void mvod_mat3_vec(const double A[9], const double v[3], double out[3])
 	memcpy(out, tmp, sizeof(tmp));
 }
 
+void mvod_rigid_apply(const double R[9], const double t[3], const double X[3], double out[3])
+{
+	mvod_mat3_vec(R, X, out);
+	for (int k = 0; k < 3; k++)
+		out[k] += t[k];
+}
+
 void mvod_mat3_tvec(const double A[9], const double v[3], double out[3])
 {
 	double tmp[3];

@@ -91,9 +91,7 @@ static int init_points(struct mvod_vo *vo, int n, mvod_map_id a, mvod_map_id b)
 		if (!vo->cur->has_pt[ib])
 			continue;
 		double X[3];
-		mvod_mat3_vec(vo->pose.R, vo->cur->pts + 3 * ib, X);
-		for (int k = 0; k < 3; k++)
-			X[k] += vo->pose.t[k];
+		mvod_rigid_apply(vo->pose.R, vo->pose.t, vo->cur->pts + 3 * ib, X);
 		if (!reprojects(mv->K, ka->Rcw, ka->tcw, X, &ka->kp[ia]) ||
 		    !reprojects(mv->K, kb->Rcw, kb->tcw, X, &kb->kp[ib]))
 			continue;

@@ -36,10 +36,7 @@ static double band_ratio(struct mvod_vo *vo, const struct mvod_map_keyframe *k, 
 		const struct mvod_map_point *p = mvod_map_point(vo->mapvo->map, k->pt[j]);
 		if (!p || !mvod_quad_contains(quad, k->kp[j].x, k->kp[j].y))
 			continue;
-		double *X = vo->prev_pts + 3 * m++;
-		mvod_mat3_vec(k->Rcw, p->pos, X);
-		for (int i = 0; i < 3; i++)
-			X[i] += k->tcw[i];
+		mvod_rigid_apply(k->Rcw, k->tcw, p->pos, vo->prev_pts + 3 * m++);
 	}
 	return mvod_scale_height_ratio(&vo->scale, vo->prev_pts, m, vo->p.camera_height_m,
 				       vo->scratch, q);

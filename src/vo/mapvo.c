@@ -267,10 +267,7 @@ static void keep_structure(struct mvod_vo *vo)
 		cur->has_pt[j] = p != NULL;
 		if (!p)
 			continue;
-		double *c = cur->pts + 3 * j;
-		mvod_mat3_vec(mv->Rcw, p->pos, c);
-		for (int k = 0; k < 3; k++)
-			c[k] += mv->tcw[k];
+		mvod_rigid_apply(mv->Rcw, mv->tcw, p->pos, cur->pts + 3 * j);
 	}
 }
 
@@ -327,11 +324,8 @@ static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const do
 /* Constant velocity: this frame's camera-from-world predicted from the last two. */
 static void predict(const struct mvod_mapvo *mv, double R[9], double t[3])
 {
-	double v[3];
 	mvod_mat3_mul(mv->vR, mv->Rcw, R);
-	mvod_mat3_vec(mv->vR, mv->tcw, v);
-	for (int k = 0; k < 3; k++)
-		t[k] = v[k] + mv->vt[k];
+	mvod_rigid_apply(mv->vR, mv->vt, mv->tcw, t);
 }
 
 /*
