@@ -32,7 +32,8 @@
  * a SEARCH_WIN window on the same levels, then refine with the WIN window on level 0 only:
  * KITTI 06, 226.0e6 -> 120.6e6 instructions per frame (BENCHMARKS.md, "Initial flow for every
  * track"). The search alone (no refinement) at 9 px failed test_klt.c's turn on mvod-synth's
- * smooth texture, which the full window at full resolution keeps as precise as before.
+ * smooth texture, which the full window at full resolution keeps as precise as before; the
+ * backward check is not refined (flow()).
  */
 #define SEARCH_WIN 9
 /* A bucket's median displacement predicts its new tracks when it holds this many measured. */
@@ -338,8 +339,10 @@ static bool predict(struct mvod_klt *k)
 
 /*
  * Lucas-Kanade of n points, from[] to to[] (which holds the guesses), into ok[]: with a
- * predicted flow a SEARCH_WIN search on the pyramid, then WIN on level 0 from its result;
- * without, WIN on every level.
+ * predicted flow a SEARCH_WIN search on the pyramid, then, forward only, WIN on level 0 from
+ * its result; without, WIN on every level. The backward pass only checks the forward one
+ * against fb_px: unrefined, KITTI 06 costs 101.6e6 instead of 120.6e6 instructions per frame,
+ * err_avg 06 / 07 0.072 / 0.043 against 0.079 / 0.050 (BENCHMARKS.md).
  */
 static int flow(struct mvod_klt *k, int backward, bool predicted, const float *from, float *to,
 		int n, uint8_t *ok)
@@ -347,8 +350,9 @@ static int flow(struct mvod_klt *k, int backward, bool predicted, const float *f
 	if (!predicted)
 		return mvod_klt_cv_flow(k->cv, backward, WIN, LEVELS, from, to, n, ok);
 	int ret = mvod_klt_cv_flow(k->cv, backward, SEARCH_WIN, LEVELS, from, to, n, ok);
-	if (!ret)
-		ret = mvod_klt_cv_flow(k->cv, backward, WIN, 0, from, to, n, k->ok_fine);
+	if (ret || backward)
+		return ret;
+	ret = mvod_klt_cv_flow(k->cv, backward, WIN, 0, from, to, n, k->ok_fine);
 	for (int i = 0; i < n && !ret; i++)
 		ok[i] = ok[i] && k->ok_fine[i];
 	return ret;
