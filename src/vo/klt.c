@@ -18,16 +18,26 @@
  * Lucas-Kanade window, pixels, and pyramid levels above the image, with at most ITERATIONS
  * steps per level down to a step of EPS_PX (klt_shim.cpp). OpenCV's defaults are 21, 3, 30,
  * 0.01; on KITTI 06 with 500 tracks they cost 1.25e9 instructions in LK over 5 frames
- * (callgrind), and 15, 2, 10, 0.03 cost 0.55e9 at the same err_avg (06: 0.077 -> 0.073,
- * 07: 0.048 -> 0.044), but the smaller window and pyramid lost the 31 px flow of a new track
- * (no prediction yet) on mvod-synth's rotate-in-place: 26 of 500 tracks kept, against 287
- * with 21, 3 (tests/integration/test_klt.c). So the window and levels stay OpenCV's (flows to
- * about 21 * 2^3 / 2 = 84 px) and only the steps are capped.
+ * (callgrind), 21, 3, 10, 0.03 cost 0.90e9 at the same err_avg. A 21 px window on 3 levels
+ * finds the 31 px flow of a track with no prediction (mvod-synth's rotate-in-place,
+ * tests/integration/test_klt.c: 287 of 500 kept; 15 px on 2 levels kept 26). It serves the
+ * frame after a start or reset, when no track has a measured flow.
  */
 #define WIN 21
 #define LEVELS 3
 #define ITERATIONS 10
 #define EPS_PX 0.03
+/*
+ * Tracks with a predicted flow (their own last displacement, or their neighbours') search with
+ * a SEARCH_WIN window on the same levels, then refine with the WIN window on level 0 only:
+ * KITTI 06, 226.0e6 -> 120.6e6 instructions per frame (BENCHMARKS.md, "Initial flow for every
+ * track"). The search alone (no refinement) at 9 px failed test_klt.c's turn on mvod-synth's
+ * smooth texture, which the full window at full resolution keeps as precise as before; the
+ * backward check is not refined (flow()).
+ */
+#define SEARCH_WIN 9
+/* A bucket's median displacement predicts its new tracks when it holds this many measured. */
+#define MIN_NEIGHBOURS 3
 /*
  * Corners and tracks stay this many pixels inside the image: the Harris score's 7x7 window
  * and its central differences reach 4 pixels out.
@@ -54,11 +64,13 @@ struct mvod_klt {
 	float *err;  /* max_tracks: last forward-backward error, pixels */
 	float *score; /* max_tracks: Harris score at detection */
 	int *ref;    /* max_tracks: index in the reference frame, -1 when it holds no such track */
+	uint8_t *fresh; /* max_tracks: 1 = started on the last frame, no displacement measured */
+	uint8_t *cell;  /* max_tracks: bucket of pos (predict's scratch) */
 	float *next, *back; /* 2 * max_tracks: forward and backward LK results */
-	uint8_t *ok, *ok_back;
+	uint8_t *ok, *ok_back, *ok_fine;
 	int fast_cap;
 	float *fast_xy;      /* 2 * fast_cap */
-	struct corner *corners; /* fast_cap */
+	struct corner *corners; /* fast_cap (>= max_tracks: predict's scratch too) */
 	int occ_w, occ_h;
 	uint8_t *occ;        /* occ_w * occ_h occupancy of OCC_PX cells */
 	int bucket[BUCKETS_X * BUCKETS_Y];
@@ -78,15 +90,19 @@ static int alloc_arrays(struct mvod_klt *k)
 	k->err = calloc(n, sizeof(float));
 	k->score = calloc(n, sizeof(float));
 	k->ref = calloc(n, sizeof(int));
+	k->fresh = calloc(n, 1);
+	k->cell = calloc(n, 1);
 	k->next = calloc(2 * n, sizeof(float));
 	k->back = calloc(2 * n, sizeof(float));
 	k->ok = calloc(n, 1);
 	k->ok_back = calloc(n, 1);
+	k->ok_fine = calloc(n, 1);
 	k->fast_xy = calloc(2 * (size_t)k->fast_cap, sizeof(float));
 	k->corners = calloc((size_t)k->fast_cap, sizeof(*k->corners));
 	k->occ = calloc((size_t)k->occ_w * (size_t)k->occ_h, 1);
-	return k->pos && k->vel && k->err && k->score && k->ref && k->next && k->back && k->ok &&
-			       k->ok_back && k->fast_xy && k->corners && k->occ
+	return k->pos && k->vel && k->err && k->score && k->ref && k->fresh && k->cell && k->next &&
+			       k->back && k->ok && k->ok_back && k->ok_fine && k->fast_xy &&
+			       k->corners && k->occ
 		       ? 0
 		       : -ENOMEM;
 }
@@ -104,6 +120,8 @@ int mvod_klt_create(const struct mvod_klt_params *p, int width, int height, stru
 	k->h = height;
 	/* FAST finds about 1 corner per 100 pixels on KITTI at threshold 20; one per 16 is room. */
 	k->fast_cap = width * height / 16 + 16;
+	if (k->fast_cap < p->max_tracks)
+		k->fast_cap = p->max_tracks;
 	k->occ_w = (width + OCC_PX - 1) / OCC_PX;
 	k->occ_h = (height + OCC_PX - 1) / OCC_PX;
 	int ret = alloc_arrays(k);
@@ -128,10 +146,13 @@ void mvod_klt_destroy(struct mvod_klt *k)
 	free(k->err);
 	free(k->score);
 	free(k->ref);
+	free(k->fresh);
+	free(k->cell);
 	free(k->next);
 	free(k->back);
 	free(k->ok);
 	free(k->ok_back);
+	free(k->ok_fine);
 	free(k->fast_xy);
 	free(k->corners);
 	free(k->occ);
@@ -141,42 +162,6 @@ void mvod_klt_destroy(struct mvod_klt *k)
 static bool inside(const struct mvod_klt *k, float x, float y)
 {
 	return x >= BORDER && y >= BORDER && x <= k->w - 1 - BORDER && y <= k->h - 1 - BORDER;
-}
-
-/*
- * Every track into the newest frame: forward from its position with its last displacement as
- * the initial flow, then back with the same displacement undone as the guess; a track stays
- * when both converge, it is still inside, and it comes back within fb_px of where it started.
- */
-static int follow(struct mvod_klt *k)
-{
-	int n = k->n;
-	for (int i = 0; i < 2 * n; i++)
-		k->next[i] = k->pos[i] + k->vel[i];
-	int ret = mvod_klt_cv_flow(k->cv, 0, k->pos, k->next, n, k->ok);
-	for (int i = 0; i < 2 * n && !ret; i++)
-		k->back[i] = k->next[i] - k->vel[i];
-	if (!ret)
-		ret = mvod_klt_cv_flow(k->cv, 1, k->next, k->back, n, k->ok_back);
-	if (ret)
-		return ret;
-	int m = 0;
-	for (int i = 0; i < n; i++) {
-		float x = k->next[2 * i], y = k->next[2 * i + 1];
-		float fb = hypotf(k->back[2 * i] - k->pos[2 * i], k->back[2 * i + 1] - k->pos[2 * i + 1]);
-		if (!k->ok[i] || !k->ok_back[i] || !(fb <= k->p.fb_px) || !inside(k, x, y))
-			continue;
-		k->vel[2 * m] = x - k->pos[2 * i];
-		k->vel[2 * m + 1] = y - k->pos[2 * i + 1];
-		k->pos[2 * m] = x;
-		k->pos[2 * m + 1] = y;
-		k->err[m] = fb;
-		k->score[m] = k->score[i];
-		k->ref[m] = k->ref[i];
-		m++;
-	}
-	k->n = m;
-	return 0;
 }
 
 /* Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. */
@@ -247,6 +232,7 @@ static void mark_tracks(struct mvod_klt *k)
 		k->err[m] = k->err[i];
 		k->score[m] = k->score[i];
 		k->ref[m] = k->ref[i];
+		k->fresh[m] = k->fresh[i];
 		m++;
 	}
 	k->n = m;
@@ -261,6 +247,7 @@ static void start_track(struct mvod_klt *k, int j, const struct corner *c)
 	k->err[j] = 0;
 	k->score[j] = c->score;
 	k->ref[j] = -1;
+	k->fresh[j] = 1;
 }
 
 /* New tracks from the ranked corners, strongest first, in free cells; quota: per bucket, or 0. */
@@ -300,6 +287,127 @@ static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 	int cells = BUCKETS_X * BUCKETS_Y;
 	add_corners(k, nc, (k->p.max_tracks + cells - 1) / cells);
 	add_corners(k, nc, 0);
+	return 0;
+}
+
+/*
+ * Median of displacement component c (0: x, 1: y) over the measured tracks of bucket b (-1:
+ * every bucket); *count: how many. k->corners is the scratch.
+ */
+static float median_flow(struct mvod_klt *k, int b, int c, int *count)
+{
+	int m = 0;
+	for (int i = 0; i < k->n; i++)
+		if (!k->fresh[i] && (b < 0 || k->cell[i] == b))
+			k->corners[m++].score = k->vel[2 * i + c];
+	*count = m;
+	if (!m)
+		return 0;
+	sort_by_score(k->corners, m);
+	return k->corners[m / 2].score;
+}
+
+/*
+ * The initial flow of the tracks started on the last frame (no displacement measured yet): the
+ * median displacement of the measured tracks of their bucket when it holds MIN_NEIGHBOURS,
+ * else of every measured track. Returns false when fewer than MIN_NEIGHBOURS are measured.
+ */
+static bool predict(struct mvod_klt *k)
+{
+	int fresh[BUCKETS_X * BUCKETS_Y] = {0}, all;
+	for (int i = 0; i < k->n; i++) {
+		k->cell[i] = (uint8_t)bucket_index(k, k->pos[2 * i], k->pos[2 * i + 1]);
+		fresh[k->cell[i]] += k->fresh[i];
+	}
+	float gx = median_flow(k, -1, 0, &all), gy = median_flow(k, -1, 1, &all);
+	if (all < MIN_NEIGHBOURS)
+		return false;
+	for (int b = 0; b < BUCKETS_X * BUCKETS_Y; b++) {
+		if (!fresh[b])
+			continue;
+		int m;
+		float x = median_flow(k, b, 0, &m), y = median_flow(k, b, 1, &m);
+		for (int i = 0; i < k->n; i++) {
+			if (k->fresh[i] && k->cell[i] == b) {
+				k->vel[2 * i] = m >= MIN_NEIGHBOURS ? x : gx;
+				k->vel[2 * i + 1] = m >= MIN_NEIGHBOURS ? y : gy;
+			}
+		}
+	}
+	return true;
+}
+
+/*
+ * Lucas-Kanade of n points, from[] to to[] (which holds the guesses), into ok[]: with a
+ * predicted flow a SEARCH_WIN search on the pyramid, then, forward only, WIN on level 0 from
+ * its result; without, WIN on every level. The backward pass only checks the forward one
+ * against fb_px: unrefined, KITTI 06 costs 101.6e6 instead of 120.6e6 instructions per frame,
+ * err_avg 06 / 07 0.072 / 0.043 against 0.079 / 0.050 (BENCHMARKS.md).
+ */
+static int flow(struct mvod_klt *k, int backward, bool predicted, const float *from, float *to,
+		int n, uint8_t *ok)
+{
+	if (!predicted)
+		return mvod_klt_cv_flow(k->cv, backward, WIN, LEVELS, from, to, n, ok);
+	int ret = mvod_klt_cv_flow(k->cv, backward, SEARCH_WIN, LEVELS, from, to, n, ok);
+	if (ret || backward)
+		return ret;
+	ret = mvod_klt_cv_flow(k->cv, backward, WIN, 0, from, to, n, k->ok_fine);
+	for (int i = 0; i < n && !ret; i++)
+		ok[i] = ok[i] && k->ok_fine[i];
+	return ret;
+}
+
+/*
+ * n points forward from from[] with v[] (displacements) as the initial flow into to[], then
+ * back into back[] with v undone as the guess; ok[] and ok_back[] say which converged.
+ */
+static int forward_back(struct mvod_klt *k, bool predicted, const float *from, const float *v,
+			float *to, float *back, uint8_t *ok, uint8_t *ok_back, int n)
+{
+	for (int i = 0; i < 2 * n; i++)
+		to[i] = from[i] + v[i];
+	int ret = flow(k, 0, predicted, from, to, n, ok);
+	for (int i = 0; i < 2 * n && !ret; i++)
+		back[i] = to[i] - v[i];
+	return ret ? ret : flow(k, 1, predicted, to, back, n, ok_back);
+}
+
+/* Track i survives: both ways converged, it came back within fb_px (*fb) and is inside. */
+static bool kept(const struct mvod_klt *k, int i, float *fb)
+{
+	*fb = hypotf(k->back[2 * i] - k->pos[2 * i], k->back[2 * i + 1] - k->pos[2 * i + 1]);
+	return k->ok[i] && k->ok_back[i] && *fb <= k->p.fb_px &&
+	       inside(k, k->next[2 * i], k->next[2 * i + 1]);
+}
+
+/*
+ * Every track into the newest frame, forward and back (forward_back) from its predicted flow;
+ * a track stays when kept() says so.
+ */
+static int follow(struct mvod_klt *k)
+{
+	bool predicted = predict(k);
+	int ret = forward_back(k, predicted, k->pos, k->vel, k->next, k->back, k->ok, k->ok_back,
+			       k->n);
+	if (ret)
+		return ret;
+	int m = 0;
+	float fb;
+	for (int i = 0; i < k->n; i++) {
+		if (!kept(k, i, &fb))
+			continue;
+		k->vel[2 * m] = k->next[2 * i] - k->pos[2 * i];
+		k->vel[2 * m + 1] = k->next[2 * i + 1] - k->pos[2 * i + 1];
+		k->pos[2 * m] = k->next[2 * i];
+		k->pos[2 * m + 1] = k->next[2 * i + 1];
+		k->err[m] = fb;
+		k->score[m] = k->score[i];
+		k->ref[m] = k->ref[i];
+		k->fresh[m] = 0;
+		m++;
+	}
+	k->n = m;
 	return 0;
 }
 

@@ -70,10 +70,10 @@ extern "C" int mvod_klt_cv_push(struct mvod_klt_cv *k, const struct mvod_image *
 	});
 }
 
-extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float *from, float *to,
-				int n, uint8_t *ok)
+extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, int win, int levels,
+				const float *from, float *to, int n, uint8_t *ok)
 {
-	if (k->have < 2 || n < 0)
+	if (k->have < 2 || n < 0 || win < 3 || win > k->win.width || levels < 0 || levels > k->levels)
 		return -EINVAL;
 	if (n == 0)
 		return 0;
@@ -82,8 +82,8 @@ extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float
 		cv::Mat st(n, 1, CV_8UC1, ok);
 		const std::vector<cv::Mat> &p0 = backward ? k->newest : k->older;
 		const std::vector<cv::Mat> &p1 = backward ? k->older : k->newest;
-		cv::calcOpticalFlowPyrLK(p0, p1, a, b, st, cv::noArray(), k->win, k->levels, k->crit,
-					 cv::OPTFLOW_USE_INITIAL_FLOW);
+		cv::calcOpticalFlowPyrLK(p0, p1, a, b, st, cv::noArray(), cv::Size(win, win), levels,
+					 k->crit, cv::OPTFLOW_USE_INITIAL_FLOW);
 		return 0;
 	});
 }

@@ -17,9 +17,9 @@ extern "C" {
 struct mvod_klt_cv;
 
 /*
- * Pyramids of levels + 1 levels for width x height grey frames, tracked with a win x win
- * pixel window, at most iterations steps per level, stopping at a step under eps_px; FAST
- * keeps at most fast_cap corners per frame.
+ * Pyramids of levels + 1 levels for width x height grey frames, bordered for Lucas-Kanade
+ * windows of up to win x win pixels, tracked with at most iterations steps per level, stopping
+ * at a step under eps_px; FAST keeps at most fast_cap corners per frame.
  */
 int mvod_klt_cv_create(int width, int height, int win, int levels, int iterations, double eps_px,
 		       int fast_cap, struct mvod_klt_cv **out);
@@ -30,11 +30,12 @@ int mvod_klt_cv_push(struct mvod_klt_cv *k, const struct mvod_image *grey);
 
 /*
  * Lucas-Kanade for n points (x, y pairs, pixels) from the older pyramid to the newest one
- * (backward = 0) or back (backward = 1). to[2n] holds the initial guesses and receives the
- * tracked positions; ok[n] gets 1 where the tracker converged.
+ * (backward = 0) or back (backward = 1), with a win x win pixel window (at most create's) on
+ * pyramid levels levels down to 0 (at most create's). to[2n] holds the initial guesses and
+ * receives the tracked positions; ok[n] gets 1 where the tracker converged.
  */
-int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, const float *from, float *to, int n,
-		     uint8_t *ok);
+int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, int win, int levels, const float *from,
+		     float *to, int n, uint8_t *ok);
 
 /*
  * FAST corners (non-maximum suppressed) of grey above threshold grey levels: xy[2 * fast_cap]
