@@ -37,6 +37,8 @@ struct mvod_calib_opts {
 	 * and the frames read so far are calibrated. May be NULL. Borrowed.
 	 */
 	volatile sig_atomic_t *stop;
+	/* The subcommand reading the views, naming its progress lines: "calibrate" (default), "mount". */
+	const char *command;
 };
 
 /* Fills the defaults above; source and board are left for the caller. */

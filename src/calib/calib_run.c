@@ -219,13 +219,13 @@ static int stopped_early(const struct mvod_calib_opts *o, struct mvod_source *sr
 	struct mvod_source_info info;
 	mvod_source_info(src, &info);
 	if (!info.live) {
-		return mvod_errf(err, errlen, -EINTR, "calibrate: interrupted after %lld frames of %s, "
+		return mvod_errf(err, errlen, -EINTR, "%s: interrupted after %lld frames of %s, "
 				 "before its end: nothing written, earlier files are as they were; "
-				 "let it run to the end, or pass --max-frames N to calibrate on the "
-				 "first N frames", (long long)sc->frames, o->source);
+				 "let it run to the end, or pass --max-frames N to use only the "
+				 "first N frames", o->command, (long long)sc->frames, o->source);
 	}
-	LOG(INFO, "calibrate: stopped after %lld frames (%lld with the board); calibrating on "
-		  "them (Ctrl-C again aborts)", (long long)sc->frames, (long long)sc->with_board);
+	LOG(INFO, "%s: stopped after %lld frames (%lld with the board); using them (Ctrl-C "
+		  "again aborts)", o->command, (long long)sc->frames, (long long)sc->with_board);
 	return 0;
 }
 
@@ -240,7 +240,7 @@ static int read_all(const struct mvod_calib_opts *o, struct mvod_source *src,
 	double next_progress = mvod_now_s() + PROGRESS_S;
 	while (!ret && !(o->max_frames && sc->frames >= o->max_frames) && !(o->stop && *o->stop)) {
 		if (mvod_now_s() >= next_progress) {
-			LOG(INFO, "calibrate: %lld frames read, %lld with the board so far",
+			LOG(INFO, "%s: %lld frames read, %lld with the board so far", o->command,
 			    (long long)sc->frames, (long long)sc->with_board);
 			next_progress += PROGRESS_S;
 		}

@@ -37,6 +37,7 @@ void mvod_calib_opts_default(struct mvod_calib_opts *o)
 	memset(o, 0, sizeof(*o));
 	o->model = MVOD_CAM_PINHOLE_RADTAN;
 	o->max_views = 80;
+	o->command = "calibrate";
 }
 
 const char *mvod_calib_verdict_name(enum mvod_calib_verdict v)

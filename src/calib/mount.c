@@ -243,6 +243,7 @@ int mvod_mount_measure(const struct mvod_mount_opts *o, const struct mvod_camera
 	co.board = o->board;
 	co.max_frames = o->max_frames;
 	co.stop = o->stop;
+	co.command = "mount";
 	struct mvod_calib_views views;
 	int ret = mvod_calib_read_views(&co, 1, &views, err, errlen);
 	res->frames_read = views.frames;

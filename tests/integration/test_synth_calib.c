@@ -275,7 +275,7 @@ static void interrupt_calibrates_what_was_read(void **state)
 	waitpid(pid, &st, 0);
 	assert_true(WIFEXITED(st));
 	assert_int_equal(WEXITSTATUS(st), 0);
-	assert_true(file_has(log, "calibrating on them"));
+	assert_true(file_has(log, "calibrate: stopped after") && file_has(log, "using them"));
 	assert_true(file_has(log, "wrote"));
 	assert_false(file_has(log, "100 frames read"));
 	struct mvod_camera est;
