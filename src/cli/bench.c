@@ -122,7 +122,6 @@ struct row {
 /* Grid keys: run options (flags of the config table) that a sweep may vary. */
 static const char *const grid_keys[] = {"mode",  "frontend", "detector", "matcher", "features",
 					"ratio", "best",     "tracks",   "resize",  "blur", NULL};
-#define GRID_KEYS_TEXT "mode, frontend, detector, matcher, features, ratio, best, tracks, resize, blur"
 
 /* One axis of a sub-grid: an option and its values (pointers into the grid's copy). */
 struct axis {
@@ -167,8 +166,14 @@ static bool in_list(const char *s, const char *const *list)
 /* Checks key=value with the very parser the option uses, so a typo fails before any run. */
 static int check_value(const char *key, const char *value)
 {
-	if (!in_list(key, grid_keys))
-		return grid_error("unknown key (" GRID_KEYS_TEXT ")", key);
+	if (!in_list(key, grid_keys)) {
+		char known[160];
+		int len = snprintf(known, sizeof(known), "unknown key (one of");
+		for (int i = 0; grid_keys[i] && len < (int)sizeof(known); i++)
+			len += snprintf(known + len, sizeof(known) - (size_t)len, "%s%s%s",
+					i ? ", " : " ", grid_keys[i], grid_keys[i + 1] ? "" : ")");
+		return grid_error(known, key);
+	}
 	struct mvod_config scratch;
 	mvod_config_default(&scratch);
 	int ret = cli_parse_key(config_key(key), value, &scratch);

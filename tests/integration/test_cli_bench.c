@@ -297,7 +297,7 @@ static void test_bad_usage(void **state)
 	(void)state;
 	static const char *const cases[][2] = {
 		{"--sweep=detector=surf", "detector"},
-		{"--sweep=colour=red", "colour"},
+		{"--sweep=colour=red", "unknown key (one of mode, frontend, "},
 		{"--sweep=features", "key=value"},
 		/* mvod run's LCM flags would be ignored: refused, by name. */
 		{"--lcm-url=memq://", "--lcm-url applies only to mvod run"},
