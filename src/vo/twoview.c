@@ -5,6 +5,7 @@
  */
 #include "vo_internal.h"
 
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -18,6 +19,13 @@
  * infinity for the direction of translation to be known.
  */
 #define CHEIRALITY_MARGIN 2
+/*
+ * depth_scale: a shared point counts when its parallax is at least FLOW_MIN_PX pixels on both
+ * steps (tracks are localised to 0.05-0.1 px: each depth within 20 %), and a step needs
+ * FLOW_MIN_POINTS such points, as structure_scale's 10 pairs.
+ */
+#define FLOW_MIN_PX 0.5f
+#define FLOW_MIN_POINTS 20
 
 static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k, double *x)
 {
@@ -25,15 +33,18 @@ static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k
 	x[1] = (k->y - c->cy) / c->fy;
 }
 
-/*
- * Median over all matches of the flow rotation alone does not explain, in pixels: the parallax
- * that translation made. A median, so that up to half the matches may be wrong.
- */
-static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
+/* Match i's flow that the rotation R does not explain, pixels: the parallax translation made. */
+static double parallax_px(const struct mvod_vo *vo, const double R[9], int i)
 {
 	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	return mvod_motion_rotation_residual(R, vo->x1 + 2 * i, vo->x2 + 2 * i) * f;
+}
+
+/* Median parallax over all matches: a median, so that up to half the matches may be wrong. */
+static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
+{
 	for (int i = 0; i < n; i++)
-		vo->scratch[i] = mvod_motion_rotation_residual(R, vo->x1 + 2 * i, vo->x2 + 2 * i) * f;
+		vo->scratch[i] = parallax_px(vo, R, i);
 	return n ? mvod_median(vo->scratch, n) : 0.0;
 }
 
@@ -62,6 +73,32 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
 		m++;
 	}
 	return mvod_motion_relative_scale(vo->prev_pts, vo->cur_pts, m, 10, vo->scratch, s);
+}
+
+/*
+ * Step length from the depths of the points both steps triangulated with some parallax, when
+ * those within MVOD_MOTION_SCALE_DEPTH are too few for structure_scale (mvod-synth's forward
+ * path at 0.1 m a frame: 18-19 shared where 20 are needed, on 7 steps of 60, and on the step
+ * after a held reference, whose structure lost a third of its points over the two frames).
+ * Both depths are along the reference's rays, in its frame: the reference's in absolute units,
+ * this step's in baselines, so each point's ratio is a step length, whatever frames the step
+ * spans; the median keeps the far points' noise (FLOW_MIN_PX) from biasing it.
+ */
+static int depth_scale(struct mvod_vo *vo, const double R[9], int n, double *s)
+{
+	if (!vo->ref->has_par)
+		return -ENODATA;
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		int a = vo->matches[i].a;
+		if (vo->mask[i] && vo->depth[i] > 0 && vo->ref->par[a] >= FLOW_MIN_PX &&
+		    parallax_px(vo, R, i) >= FLOW_MIN_PX)
+			vo->scratch[m++] = vo->ref->pts[3 * a + 2] / vo->depth[i];
+	}
+	if (m < FLOW_MIN_POINTS)
+		return -ENODATA;
+	*s = mvod_median(vo->scratch, m);
+	return 0;
 }
 
 /* This step's length in metres, NAN when not measured; *q its quality (0-1). */
@@ -106,7 +143,11 @@ static double metric_step(struct mvod_vo *vo, int n, double s, enum mvod_scale_s
 	return s * f;
 }
 
-static double step_length(struct mvod_vo *vo, int n, const double *gt,
+/*
+ * Free scale's step: from the structure both steps share (near points' distances), else from
+ * the depths of all the points they share, else constant speed.
+ */
+static double step_length(struct mvod_vo *vo, const double R[9], int n, const double *gt,
 			  enum mvod_scale_source *src)
 {
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT) {
@@ -114,7 +155,8 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 		return mvod_vec3_dist(gt, vo->ref->gt);
 	}
 	double s;
-	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {
+	if ((structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) ||
+	    (depth_scale(vo, R, n, &s) == 0 && isfinite(s) && s > 0)) {
 		*src = MVOD_SCALE_STRUCTURE;
 	} else {
 		*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
@@ -125,21 +167,27 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 	return metric_step(vo, n, s, src);
 }
 
-/* Structure of this step in the new reference's frame (X2 = R X1 + t s), for the next scale. */
+/*
+ * Structure of this step in the new reference's frame (X2 = R X1 + t s), its inliers'
+ * parallax and its length, for the next step's scale.
+ */
 static void store_structure(struct mvod_vo *vo, const double R[9], const double t[3], double s,
 			    int n)
 {
 	memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+	memset(vo->cur->par, 0, (size_t)vo->cur->f.n * sizeof(float));
+	vo->cur->has_par = 1;
 	for (int i = 0; i < n; i++) {
-		if (!well_triangulated(vo, i))
+		if (!vo->mask[i] || !(vo->depth[i] > 0))
 			continue;
+		int b = vo->matches[i].b;
 		double X1[3] = {vo->x1[2 * i] * vo->depth[i] * s, vo->x1[2 * i + 1] * vo->depth[i] * s,
 				vo->depth[i] * s};
-		double *X2 = vo->cur->pts + 3 * vo->matches[i].b;
-		mvod_mat3_vec(R, X1, X2);
+		mvod_mat3_vec(R, X1, vo->cur->pts + 3 * b);
 		for (int k = 0; k < 3; k++)
-			X2[k] += t[k] * s;
-		vo->cur->has_pt[vo->matches[i].b] = 1;
+			vo->cur->pts[3 * b + k] += t[k] * s;
+		vo->cur->par[b] = (float)parallax_px(vo, R, i);
+		vo->cur->has_pt[b] = well_triangulated(vo, i);
 	}
 }
 
@@ -216,7 +264,7 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	 */
 	if (res->inliers < CHEIRALITY_MARGIN * runner_up)
 		return rot_ok ? apply_rotation(vo, &rot, res) : MVOD_FRAME_FEW_INLIERS;
-	double s = step_length(vo, n, gt, &res->scale_source);
+	double s = step_length(vo, R, n, gt, &res->scale_source);
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);
 	res->step_m = s;
