@@ -284,7 +284,12 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);
 	res->step_m = s;
-	vo->last_step = s;
+	/*
+	 * Per frame: a step over a held reference spans several, and taken whole as the next
+	 * one-frame step's length it doubled every step after the next fallback to constant
+	 * speed (mvod-synth forward with 5 held frames: Sim(3) ATE 0.319 m, 0.015 m per frame).
+	 */
+	vo->last_step = s / (double)(vo->cur->seq - vo->ref->seq);
 	vo->have_step = 1;
 	return MVOD_FRAME_MOTION;
 }

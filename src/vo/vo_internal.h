@@ -47,7 +47,7 @@ struct mvod_vo {
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
 	int64_t frames;     /* frames processed, numbering the slots (seq) */
-	double last_step;   /* length of the last translation step, for constant speed */
+	double last_step;   /* the last translation step's length per frame it spanned: speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
 	struct mvod_scale_filter scale; /* --scale height, external */
