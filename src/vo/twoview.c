@@ -287,9 +287,11 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	/*
 	 * Per frame: a step over a held reference spans several, and taken whole as the next
 	 * one-frame step's length it doubled every step after the next fallback to constant
-	 * speed (mvod-synth forward with 5 held frames: Sim(3) ATE 0.319 m, 0.015 m per frame).
+	 * speed (mvod-synth forward with 5 held frames: Sim(3) ATE 0.319 m, 0.029 m per frame).
+	 * A constant-speed step is that speed already, whatever it spans (mapping.c multiplies).
 	 */
-	vo->last_step = s / (double)(vo->cur->seq - vo->ref->seq);
+	if (res->scale_source != MVOD_SCALE_CONSTANT_SPEED)
+		vo->last_step = s / (double)(vo->cur->seq - vo->ref->seq);
 	vo->have_step = 1;
 	return MVOD_FRAME_MOTION;
 }

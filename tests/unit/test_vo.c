@@ -372,7 +372,8 @@ static void keep_far(struct view *v, double z_min)
  * rotation frame, the reference kept) the camera moves 2 m, twice the last step, and sees only
  * points the last step left too far (beyond 50 baselines) to carry structure. Constant speed
  * made that step one frame's long, which halved every later step on mvod-synth's forward path
- * (tests/integration/test_klt.c); the points' depths from both steps measure it.
+ * (tests/integration/test_klt.c); the points' depths from both steps measure it. And the
+ * speed it leaves for constant speed is per frame: taken whole, it doubled later steps.
  */
 static void test_held_reference_step_spans_frames(void **state)
 {
@@ -390,6 +391,14 @@ static void test_held_reference_step_spans_frames(void **state)
 	assert_int_equal(res.scale_source, MVOD_SCALE_STRUCTURE);
 	/* Float-rounded pixels (1e-5 px) on 1-5 px of parallax: within 0.1 % (measured 1e-6). */
 	assert_true(fabs(res.step_m / before.step_m - 2) < 2e-3);
+	/* The speed it leaves is per frame: a later one-frame step at constant speed is half. */
+	struct mvod_vo_result held = res;
+	struct mvod_pose p5 = at(0, 0, 5, 0), p6 = at(0, 0, 6, 0);
+	mvod_vo_restart(vo);
+	feed(vo, &p5);
+	res = feed(vo, &p6);
+	assert_int_equal(res.scale_source, MVOD_SCALE_CONSTANT_SPEED);
+	assert_true(res.step_m == held.step_m / 2); /* the same division, exactly */
 	mvod_vo_destroy(vo);
 }
 
