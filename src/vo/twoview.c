@@ -76,21 +76,20 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
 }
 
 /*
- * Length of a step that spans several frames (its reference held over rotation frames) from
- * the depths of the points both steps triangulated with some parallax, when those within
- * MVOD_MOTION_SCALE_DEPTH are too few for structure_scale: the constant-speed fallback gives
- * such a step one frame's length, which halved every later step on mvod-synth's forward path
- * (0.1 m a frame: 19 near points shared after one held frame, where 20 are needed). Both
+ * Step length from the depths of the points both steps triangulated with some parallax, when
+ * those within MVOD_MOTION_SCALE_DEPTH are too few for structure_scale. Constant speed, the
+ * fallback before, gave a step over a held reference one frame's length, which halved every
+ * later step on mvod-synth's forward path (0.1 m a frame: 19 near points shared after one
+ * held frame, where 20 are needed), and kept a braking camera at full speed (stop-go). Both
  * depths are along the reference's rays, in its frame: the reference's in absolute units,
  * this step's in baselines, so each point's ratio is a step length, whatever frames the step
- * spans, and no step is invented over a standstill. A one-frame step keeps constant speed:
- * scaled this way too, KITTI 07's opening steps came within 1.5 % of the truth (constant
- * speed: up to 40 % short) but its Sim(3) ATE ended worse, 0.379 m against 0.370 m, the
- * short opening having offset structure's later drift (BENCHMARKS.md, "Held reference").
+ * spans, and no step is invented over a standstill. Measured: stop-go's Sim(3) ATE 0.168 m
+ * -> 0.008 m; KITTI 07's opening steps within 1.5 % of the truth (constant speed: up to 40 %
+ * short), though its ATE ends 0.379 m against 0.370 m (BENCHMARKS.md, "Held reference").
  */
 static int depth_scale(struct mvod_vo *vo, const double R[9], int n, double *s)
 {
-	if (!vo->ref->has_par || vo->cur->seq - vo->ref->seq < 2)
+	if (!vo->ref->has_par)
 		return -ENODATA;
 	int m = 0;
 	for (int i = 0; i < n; i++) {
