@@ -20,12 +20,12 @@
  */
 #define CHEIRALITY_MARGIN 2
 /*
- * depth_scale: a shared point counts when its parallax is at least FLOW_MIN_PX pixels on both
+ * depth_scale: a shared point counts when its parallax is at least DEPTH_MIN_PX pixels on both
  * steps (tracks are localised to 0.05-0.1 px: each depth within 20 %), and a step needs
- * FLOW_MIN_POINTS such points, as structure_scale's 10 pairs.
+ * DEPTH_MIN_POINTS such points, as structure_scale's 10 pairs.
  */
-#define FLOW_MIN_PX 0.5f
-#define FLOW_MIN_POINTS 20
+#define DEPTH_MIN_PX 0.5f
+#define DEPTH_MIN_POINTS 20
 
 static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k, double *x)
 {
@@ -94,11 +94,11 @@ static int depth_scale(struct mvod_vo *vo, const double R[9], int n, double *s)
 	int m = 0;
 	for (int i = 0; i < n; i++) {
 		int a = vo->matches[i].a;
-		if (vo->mask[i] && vo->depth[i] > 0 && vo->ref->par[a] >= FLOW_MIN_PX &&
-		    parallax_px(vo, R, i) >= FLOW_MIN_PX)
+		if (vo->mask[i] && vo->depth[i] > 0 && vo->ref->par[a] >= DEPTH_MIN_PX &&
+		    parallax_px(vo, R, i) >= DEPTH_MIN_PX)
 			vo->scratch[m++] = vo->ref->pts[3 * a + 2] / vo->depth[i];
 	}
-	if (m < FLOW_MIN_POINTS)
+	if (m < DEPTH_MIN_POINTS)
 		return -ENODATA;
 	*s = mvod_median(vo->scratch, m);
 	return 0;
@@ -171,8 +171,8 @@ static double step_length(struct mvod_vo *vo, const double R[9], int n, const do
 }
 
 /*
- * Structure of this step in the new reference's frame (X2 = R X1 + t s), its inliers'
- * parallax and its length, for the next step's scale.
+ * Structure of this step in the new reference's frame (X2 = R X1 + t s), every inlier's (the
+ * near ones marked in has_pt), and their parallax, for the next step's scale.
  */
 static void store_structure(struct mvod_vo *vo, const double R[9], const double t[3], double s,
 			    int n)
