@@ -149,7 +149,8 @@ struct mvod_vo_params {
 	double ransac_conf;     /* E-RANSAC confidence. 0.999 */
 	int min_matches;        /* fewer matches than this: frame not tracked. 30 */
 	int min_inliers;        /* fewer E inliers in front of both cameras: not tracked. 20 */
-	double min_parallax_px; /* median rotation-compensated flow below this: rotation only. 1.0 */
+	double min_parallax_px; /* median rotation-compensated flow below this: rotation only
+				   (KLT: below half of it), pixels. 1.0 */
 	enum mvod_scale_mode scale_mode;
 	double camera_height_m; /* HEIGHT: the camera's height above the ground, metres. 0 */
 	/*

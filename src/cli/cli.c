@@ -173,7 +173,7 @@ void cli_usage_vo(FILE *out)
 "  --ransac-px P         inlier threshold in pixels (MAGSAC: its upper bound; default 1.0)\n"
 "  --confidence C        RANSAC confidence (default 0.999)\n"
 "  --min-parallax P      rotation-compensated median flow in pixels below which a frame is\n"
-"                        treated as rotation only (default 1.0)\n"
+"                        treated as rotation only (default 1.0; KLT tracks use half)\n"
 "  --resize F            scale images by F in (0,1] before tracking (default 1)\n"
 "  --blur K              Gaussian blur with a KxK kernel, K odd, 0 = off (default 0)\n"
 "\n");

@@ -5,6 +5,7 @@
  */
 #include "vo_internal.h"
 
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -18,6 +19,13 @@
  * infinity for the direction of translation to be known.
  */
 #define CHEIRALITY_MARGIN 2
+/*
+ * depth_scale: a shared point counts when its parallax is at least DEPTH_MIN_PX pixels on both
+ * steps (tracks are localised to 0.05-0.1 px: each depth within 20 %), and a step needs
+ * DEPTH_MIN_POINTS such points, as structure_scale's 10 pairs.
+ */
+#define DEPTH_MIN_PX 0.5f
+#define DEPTH_MIN_POINTS 20
 
 static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k, double *x)
 {
@@ -25,15 +33,18 @@ static void normalise(const struct mvod_camera *c, const struct mvod_keypoint *k
 	x[1] = (k->y - c->cy) / c->fy;
 }
 
-/*
- * Median over all matches of the flow rotation alone does not explain, in pixels: the parallax
- * that translation made. A median, so that up to half the matches may be wrong.
- */
-static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
+/* Match i's flow that the rotation R does not explain, pixels: the parallax translation made. */
+static double parallax_px(const struct mvod_vo *vo, const double R[9], int i)
 {
 	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
+	return mvod_motion_rotation_residual(R, vo->x1 + 2 * i, vo->x2 + 2 * i) * f;
+}
+
+/* Median parallax over all matches: a median, so that up to half the matches may be wrong. */
+static double rotation_free_parallax(struct mvod_vo *vo, const double R[9], int n)
+{
 	for (int i = 0; i < n; i++)
-		vo->scratch[i] = mvod_motion_rotation_residual(R, vo->x1 + 2 * i, vo->x2 + 2 * i) * f;
+		vo->scratch[i] = parallax_px(vo, R, i);
 	return n ? mvod_median(vo->scratch, n) : 0.0;
 }
 
@@ -62,6 +73,35 @@ static int structure_scale(struct mvod_vo *vo, int n, double *s)
 		m++;
 	}
 	return mvod_motion_relative_scale(vo->prev_pts, vo->cur_pts, m, 10, vo->scratch, s);
+}
+
+/*
+ * Step length from the depths of the points both steps triangulated with some parallax, when
+ * those within MVOD_MOTION_SCALE_DEPTH are too few for structure_scale. Constant speed, the
+ * fallback before, gave a step over a held reference one frame's length, which halved every
+ * later step on mvod-synth's forward path (0.1 m a frame: 19 near points shared after one
+ * held frame, where 20 are needed), and kept a braking camera at full speed (stop-go). Both
+ * depths are along the reference's rays, in its frame: the reference's in absolute units,
+ * this step's in baselines, so each point's ratio is a step length, whatever frames the step
+ * spans, and no step is invented over a standstill. Measured: stop-go's Sim(3) ATE 0.168 m
+ * -> 0.008 m; KITTI 07's opening steps within 1.5 % of the truth (constant speed: up to 40 %
+ * short), though its ATE ends 0.379 m against 0.370 m (BENCHMARKS.md, "Held reference").
+ */
+static int depth_scale(struct mvod_vo *vo, const double R[9], int n, double *s)
+{
+	if (!vo->ref->has_par)
+		return -ENODATA;
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		int a = vo->matches[i].a;
+		if (vo->mask[i] && vo->depth[i] > 0 && vo->ref->par[a] >= DEPTH_MIN_PX &&
+		    parallax_px(vo, R, i) >= DEPTH_MIN_PX)
+			vo->scratch[m++] = vo->ref->pts[3 * a + 2] / vo->depth[i];
+	}
+	if (m < DEPTH_MIN_POINTS)
+		return -ENODATA;
+	*s = mvod_median(vo->scratch, m);
+	return 0;
 }
 
 /* This step's length in metres, NAN when not measured; *q its quality (0-1). */
@@ -106,7 +146,11 @@ static double metric_step(struct mvod_vo *vo, int n, double s, enum mvod_scale_s
 	return s * f;
 }
 
-static double step_length(struct mvod_vo *vo, int n, const double *gt,
+/*
+ * Free scale's step: from the structure both steps share (near points' distances), else from
+ * the depths of all the points they share, else constant speed.
+ */
+static double step_length(struct mvod_vo *vo, const double R[9], int n, const double *gt,
 			  enum mvod_scale_source *src)
 {
 	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT) {
@@ -114,7 +158,8 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 		return mvod_vec3_dist(gt, vo->ref->gt);
 	}
 	double s;
-	if (structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) {
+	if ((structure_scale(vo, n, &s) == 0 && isfinite(s) && s > 0) ||
+	    (depth_scale(vo, R, n, &s) == 0 && isfinite(s) && s > 0)) {
 		*src = MVOD_SCALE_STRUCTURE;
 	} else {
 		*src = vo->have_step ? MVOD_SCALE_CONSTANT_SPEED : MVOD_SCALE_UNIT;
@@ -125,21 +170,27 @@ static double step_length(struct mvod_vo *vo, int n, const double *gt,
 	return metric_step(vo, n, s, src);
 }
 
-/* Structure of this step in the new reference's frame (X2 = R X1 + t s), for the next scale. */
+/*
+ * Structure of this step in the new reference's frame (X2 = R X1 + t s), every inlier's (the
+ * near ones marked in has_pt), and their parallax, for the next step's scale.
+ */
 static void store_structure(struct mvod_vo *vo, const double R[9], const double t[3], double s,
 			    int n)
 {
 	memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+	memset(vo->cur->par, 0, (size_t)vo->cur->f.n * sizeof(float));
+	vo->cur->has_par = 1;
 	for (int i = 0; i < n; i++) {
-		if (!well_triangulated(vo, i))
+		if (!vo->mask[i] || !(vo->depth[i] > 0))
 			continue;
+		int b = vo->matches[i].b;
 		double X1[3] = {vo->x1[2 * i] * vo->depth[i] * s, vo->x1[2 * i + 1] * vo->depth[i] * s,
 				vo->depth[i] * s};
-		double *X2 = vo->cur->pts + 3 * vo->matches[i].b;
-		mvod_mat3_vec(R, X1, X2);
+		mvod_mat3_vec(R, X1, vo->cur->pts + 3 * b);
 		for (int k = 0; k < 3; k++)
-			X2[k] += t[k] * s;
-		vo->cur->has_pt[vo->matches[i].b] = 1;
+			vo->cur->pts[3 * b + k] += t[k] * s;
+		vo->cur->par[b] = (float)parallax_px(vo, R, i);
+		vo->cur->has_pt[b] = well_triangulated(vo, i);
 	}
 }
 
@@ -160,10 +211,22 @@ struct rotation {
 	int inliers;
 };
 
+/*
+ * The median parallax below which a frame is a rotation, pixels. min_parallax_px is sized for
+ * ORB keypoints, localised to about 0.3 px; KLT tracks are to 0.1 px (tests/integration/
+ * test_klt.c), so they take half of it: 0.5 px by default is still 5 times their error, and
+ * mvod-synth's forward path at 0.1 m a frame (median parallax 0.98-1.01 px) no longer
+ * straddles it. A held frame keeps its reference's position: one step off until the next.
+ */
+static double min_parallax(const struct mvod_vo *vo)
+{
+	return vo->klt ? 0.5 * vo->p.min_parallax_px : vo->p.min_parallax_px;
+}
+
 static void fit_rotation(struct mvod_vo *vo, int n, struct rotation *rot)
 {
 	double f = 0.5 * (vo->cam.fx + vo->cam.fy);
-	double thresh = (vo->p.min_parallax_px + vo->p.ransac_px) / f;
+	double thresh = (min_parallax(vo) + vo->p.ransac_px) / f;
 	rot->inliers = mvod_motion_rotation_ransac(vo->x1, vo->x2, n, thresh, 64, vo->mask, rot->R);
 }
 
@@ -180,7 +243,7 @@ static enum mvod_frame_status apply_rotation(struct mvod_vo *vo, const struct ro
 /*
  * A camera that only rotates (or stands still) gives a degenerate essential matrix: any t
  * fits. So the rotation-only model is fitted first; if it explains the flow to within
- * min_parallax_px, the frame is a rotation and translation is left alone. The same fit serves
+ * min_parallax(), the frame is a rotation and translation is left alone. The same fit serves
  * a frame whose translation turns out unknowable (a near tie below).
  */
 enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *gt,
@@ -194,7 +257,7 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	struct rotation rot;
 	fit_rotation(vo, n, &rot);
 	bool rot_ok = rot.inliers >= vo->p.min_inliers;
-	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < vo->p.min_parallax_px)
+	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < min_parallax(vo))
 		return apply_rotation(vo, &rot, res);
 	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
 	double E[9], R1[9], R2[9], tu[3], R[9], t[3];
@@ -216,11 +279,18 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	 */
 	if (res->inliers < CHEIRALITY_MARGIN * runner_up)
 		return rot_ok ? apply_rotation(vo, &rot, res) : MVOD_FRAME_FEW_INLIERS;
-	double s = step_length(vo, n, gt, &res->scale_source);
+	double s = step_length(vo, R, n, gt, &res->scale_source);
 	apply_motion(vo, R, t, s);
 	store_structure(vo, R, t, s, n);
 	res->step_m = s;
-	vo->last_step = s;
+	/*
+	 * Per frame: a step over a held reference spans several, and taken whole as the next
+	 * one-frame step's length it doubled every step after the next fallback to constant
+	 * speed (mvod-synth forward with 5 held frames: Sim(3) ATE 0.319 m, 0.029 m per frame).
+	 * A constant-speed step is that speed already, whatever it spans (mapping.c multiplies).
+	 */
+	if (res->scale_source != MVOD_SCALE_CONSTANT_SPEED)
+		vo->last_step = s / (double)(vo->cur->seq - vo->ref->seq);
 	vo->have_step = 1;
 	return MVOD_FRAME_MOTION;
 }

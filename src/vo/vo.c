@@ -170,7 +170,8 @@ static int slot_init(struct frame_slot *k, int cap, int desc_bytes)
 	k->f.desc = calloc((size_t)cap, (size_t)desc_bytes);
 	k->pts = calloc((size_t)cap * 3, sizeof(double));
 	k->has_pt = calloc((size_t)cap, 1);
-	return k->f.kp && k->f.desc && k->pts && k->has_pt ? 0 : -ENOMEM;
+	k->par = calloc((size_t)cap, sizeof(float));
+	return k->f.kp && k->f.desc && k->pts && k->has_pt && k->par ? 0 : -ENOMEM;
 }
 
 static void slot_fini(struct frame_slot *k)
@@ -179,6 +180,7 @@ static void slot_fini(struct frame_slot *k)
 	free(k->f.desc);
 	free(k->pts);
 	free(k->has_pt);
+	free(k->par);
 }
 
 static int alloc_buffers(struct mvod_vo *vo)
@@ -323,8 +325,10 @@ void mvod_vo_destroy(struct mvod_vo *vo)
 
 void mvod_vo_promote(struct mvod_vo *vo, const double *gt, bool with_structure)
 {
-	if (!with_structure)
+	if (!with_structure) {
 		memset(vo->cur->has_pt, 0, (size_t)vo->cur->f.n);
+		vo->cur->has_par = 0;
+	}
 	struct frame_slot *k = vo->ref;
 	vo->ref = vo->cur;
 	vo->cur = k;
@@ -495,6 +499,7 @@ static int begin(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *re
 		return -EINVAL;
 	memset(res, 0, sizeof(*res));
 	vo->cur->seq = vo->frames++;
+	vo->cur->has_par = 0; /* until a two-view step writes its parallax (twoview.c) */
 	return 0;
 }
 

@@ -15,6 +15,14 @@ struct frame_slot {
 	struct mvod_features f;
 	double *pts; /* cap * 3: point in this camera's frame, absolute units */
 	uint8_t *has_pt;
+	/*
+	 * When a two-view step made this frame (has_par; else par is stale): per keypoint, the
+	 * parallax that step measured there, pixels with the rotation removed, 0 for a point that
+	 * was not an inlier in front. An inlier's point is in pts even when has_pt is 0 (too far
+	 * for structure_scale): twoview.c's depth_scale takes those with parallax.
+	 */
+	int has_par;
+	float *par; /* cap */
 	struct mvod_pose pose; /* camera-to-world */
 	double gt[3]; /* ground-truth position, with --scale gt */
 	double odo;   /* --scale external: odometer at this frame, metres; NAN unknown */
@@ -39,7 +47,7 @@ struct mvod_vo {
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
 	int64_t frames;     /* frames processed, numbering the slots (seq) */
-	double last_step;   /* length of the last translation step, for constant speed */
+	double last_step;   /* the last translation step's length per frame it spanned: speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
 	struct mvod_scale_filter scale; /* --scale height, external */

@@ -352,6 +352,56 @@ static void test_few_features_keep_reference(void **state)
 	mvod_vo_destroy(vo);
 }
 
+/* Keeps the features of v whose world point lies beyond z_min metres (world z). */
+static void keep_far(struct view *v, double z_min)
+{
+	int m = 0;
+	for (int i = 0; i < v->f.n; i++) {
+		if (world[v->id[i]][2] <= z_min)
+			continue;
+		v->kp[m] = v->kp[i];
+		memcpy(v->d + m * MVOD_ORB_DESC_BYTES, v->d + i * MVOD_ORB_DESC_BYTES,
+		       MVOD_ORB_DESC_BYTES);
+		v->id[m++] = v->id[i];
+	}
+	v->f.n = m;
+}
+
+/*
+ * A step over a held reference gets its true length: after a frame at a standstill (a
+ * rotation frame, the reference kept) the camera moves 2 m, twice the last step, and sees only
+ * points the last step left too far (beyond 50 baselines) to carry structure. Constant speed
+ * made that step one frame's long, which halved every later step on mvod-synth's forward path
+ * (tests/integration/test_klt.c); the points' depths from both steps measure it. And the
+ * speed it leaves for constant speed is per frame: taken whole, it doubled later steps.
+ */
+static void test_held_reference_step_spans_frames(void **state)
+{
+	struct mvod_vo *vo = make_vo(MVOD_SCALE_MODE_AUTO);
+	struct mvod_vo_result before = start_tracking(vo);
+	struct mvod_pose p2 = at(0, 0, 2, 0), p4 = at(0, 0, 4, 0);
+	struct mvod_vo_result res = feed(vo, &p2);
+	assert_frame(&res, MVOD_FRAME_ROTATION, MVOD_STATE_TRACKING);
+	static struct view far;
+	project(&far, &p4);
+	keep_far(&far, 53.0); /* beyond 51 m from frame 1 (z = 1): none within 50 baselines */
+	assert_true(far.f.n >= 40); /* enough for the essential matrix: this is about scale */
+	res = feed_view(vo, &far);
+	assert_frame(&res, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+	assert_int_equal(res.scale_source, MVOD_SCALE_STRUCTURE);
+	/* Float-rounded pixels (1e-5 px) on 1-5 px of parallax: within 0.1 % (measured 1e-6). */
+	assert_true(fabs(res.step_m / before.step_m - 2) < 2e-3);
+	/* The speed it leaves is per frame: a later one-frame step at constant speed is half. */
+	struct mvod_vo_result held = res;
+	struct mvod_pose p5 = at(0, 0, 5, 0), p6 = at(0, 0, 6, 0);
+	mvod_vo_restart(vo);
+	feed(vo, &p5);
+	res = feed(vo, &p6);
+	assert_int_equal(res.scale_source, MVOD_SCALE_CONSTANT_SPEED);
+	assert_true(res.step_m == held.step_m / 2); /* the same division, exactly */
+	mvod_vo_destroy(vo);
+}
+
 /*
  * A restart (the source came back) forgets the reference but keeps the pose: the next frame
  * is a first frame at the last pose, and the next step is scaled by the last one's length.
@@ -618,6 +668,7 @@ int main(void)
 		cmocka_unit_test(test_rotation_keeps_reference),
 		cmocka_unit_test(test_too_few_inliers_is_lost),
 		cmocka_unit_test(test_few_features_keep_reference),
+		cmocka_unit_test(test_held_reference_step_spans_frames),
 		cmocka_unit_test(test_restart_keeps_pose),
 		cmocka_unit_test(test_seam_refuses_bad_features),
 		cmocka_unit_test(test_map_states),
