@@ -94,6 +94,33 @@ static void test_ground_prior_learns_pitch(void **state)
 	assert_memory_equal(prior, before, sizeof(before));
 }
 
+/*
+ * A ground 3 deg from the expected normal (a turn's kerb and pavement, or an unknown mount):
+ * no measurement and no learning for MVOD_GROUND_TILTED_RUN fits in a row, then the normal
+ * learns (the mount) and, once within MVOD_GROUND_MAX_TILT_DEG, the height is measured again.
+ */
+static void test_height_tilted_fit(void **state)
+{
+	(void)state;
+	double X[300 * 3], scratch[300], q;
+	plane_scene(3 * M_PI / 180, X);
+	struct mvod_scale_filter f;
+	mvod_scale_filter_init(&f, 0.5, 0.22);
+	const double level[3] = {0, 1, 0};
+	for (int i = 0; i < MVOD_GROUND_TILTED_RUN; i++) {
+		assert_true(isnan(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q)));
+		assert_memory_equal(f.ground_n, level, sizeof(level));
+	}
+	int fits = 0;
+	double r = NAN;
+	while (isnan(r) && fits++ < 10)
+		r = mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q);
+	/* 3 deg x 0.9^k under 2 deg from k = 4 on; the exact plane's height (16) to rounding. */
+	assert_int_equal(fits, 5);
+	assert_true(fabs(r - 0.1) < 1e-9);
+	assert_int_equal(f.tilted, 0);
+}
+
 static void test_ground_fit_needs_ground(void **state)
 {
 	(void)state;
@@ -420,6 +447,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_ground_fit_exact_plane),
 		cmocka_unit_test(test_ground_prior_learns_pitch),
+		cmocka_unit_test(test_height_tilted_fit),
 		cmocka_unit_test(test_ground_fit_needs_ground),
 		cmocka_unit_test(test_ground_fit_lowest_plane),
 		cmocka_unit_test(test_filter),
