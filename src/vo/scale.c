@@ -222,7 +222,7 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 		return NAN;
 	bool level = dot3(f->ground_n, g.n) >= cos(MVOD_GROUND_MAX_TILT_DEG * M_PI / 180);
 	f->tilted = level ? 0 : f->tilted + 1;
-	if (level || f->tilted > MVOD_GROUND_TILTED_RUN)
+	if (level || f->since < 0 || f->tilted > MVOD_GROUND_TILTED_RUN)
 		mvod_ground_prior_update(f->ground_n, &g);
 	if (!level)
 		return NAN;
