@@ -100,17 +100,23 @@ static int count_source(const char *name, int src)
 }
 
 /*
- * --scale height 1.6 with the two arguments given: the SE(3) ATE (no alignment) is within 3 %
- * of the path, the issue's bound for a whole drive; a path left in any other unit is off by
- * far more.
+ * --scale height 1.6 with the two arguments given: the SE(3) ATE (no alignment) is within
+ * bound of the path (the issue's 3 % for a whole drive unless said); a path left in any other
+ * unit is off by far more.
  */
-static void height_run(const char *name, const char *flag, const char *value)
+static void height_run_within(const char *name, const char *flag, const char *value,
+			      double bound)
 {
 	struct run_result r;
 	struct traj_errors e;
 	run_mvod(&r, name, "--scale", "height", "--camera-height", "1.6", flag, value);
 	metric_errors(&r, name, &e);
-	assert_true(e.ate_m < 0.03 * e.length_m);
+	assert_true(e.ate_m < bound * e.length_m);
+}
+
+static void height_run(const char *name, const char *flag, const char *value)
+{
+	height_run_within(name, flag, value, 0.03);
 }
 
 static void test_height(void **state)
@@ -122,6 +128,39 @@ static void test_height(void **state)
 	 */
 	height_run("height", "--frontend", "klt");
 	assert_true(count_source("height", MVOD_POSE_T_SCALE_HEIGHT) > FRAMES / 2);
+}
+
+/*
+ * The street seen by a camera pitched 3 deg down, with no mount in its camera file: the ground
+ * normal, level at the start, learns the pitch before the first scale (scale.h,
+ * MVOD_GROUND_TILTED_RUN). Measured: two-view 1.6 %, map 3.4 %: the frames held at the
+ * origin while the normal learns count whole in this short path's ATE, so map mode gets 5 %.
+ * Over 80 frames of the same path: 1.1 % and 2.2 %; 0.3 % and 0.6 % with a normal that
+ * follows every fit within 5 deg (at the cost of KITTI 07's turns); 10 % and 16 % when it
+ * learnt only from fits within 2 deg of level (the output held for 25 frames).
+ */
+static void test_height_pitched(void **state)
+{
+	(void)state;
+	char poses[300], street[3][300];
+	snprintf(poses, sizeof(poses), "%s/pitched.kitti", harness_tmpdir());
+	FILE *f = fopen(poses, "w");
+	assert_non_null(f);
+	double p = 3 * M_PI / 180; /* camera to world: a turn of -3 deg about x, 0.2 m a frame */
+	for (int i = 0; i < FRAMES; i++)
+		fprintf(f, "1 0 0 0 0 %.9f %.9f 0 0 %.9f %.9f %.3f\n", cos(p), sin(p), -sin(p),
+			cos(p), 0.2 * i);
+	assert_int_equal(fclose(f), 0);
+	strcpy(street[0], video), strcpy(street[1], calib), strcpy(street[2], gt);
+	char pdir[240];
+	snprintf(pdir, sizeof(pdir), "%s/pitched-street", harness_tmpdir());
+	harness_synth(pdir, poses, FRAMES, "mkv", NULL);
+	snprintf(video, sizeof(video), "file:%s/video.mkv", pdir);
+	snprintf(calib, sizeof(calib), "%s/calib.json", pdir);
+	snprintf(gt, sizeof(gt), "%s/gt.tum", pdir);
+	height_run("pitched", "--mode", "twoview");
+	height_run_within("pitchedmap", "--mode", "map", 0.05);
+	strcpy(video, street[0]), strcpy(calib, street[1]), strcpy(gt, street[2]);
 }
 
 /*
@@ -267,6 +306,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_height),
 		cmocka_unit_test(test_height_map),
+		cmocka_unit_test(test_height_pitched),
 		cmocka_unit_test(test_external),
 		cmocka_unit_test(test_external_speed_stops),
 		cmocka_unit_test(test_bad_heights),
