@@ -83,8 +83,9 @@ struct mvod_scale_filter {
 	int refused;    /* measurements refused in a row */
 	double ground_n[3]; /* --scale height: the ground's expected normal in the camera frame
 			       (the mount's pitch and roll), from (0, 1, 0) on */
-	int tilted;     /* --scale height: ground fits in a row tilted beyond
-			   MVOD_GROUND_MAX_TILT_DEG from ground_n */
+	double max_tilt_deg; /* --scale height: MVOD_GROUND_MAX_TILT_DEG at init; 180: none */
+	int tilted;     /* --scale height: ground fits in a row tilted beyond max_tilt_deg
+			   from ground_n */
 	/*
 	 * The first scale is the median of this many measurements (1 at init, at most
 	 * MVOD_SCALE_FIRST_MAX); until then the output is not metric. Their ratios are alike:
@@ -113,8 +114,9 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
  * average (sd 1.3) on straight road and 4.0 deg (sd 2.7) in its two turns (3-4 deg of yaw a
  * frame: the band's far part on the kerb and pavement inside the bend); taken, they pitched the
  * expected normal 4.5 deg and made each height 10-30 % high (steps short) through the second
- * turn and after it. Gates of 1.5, 2, 2.5, 3 deg and none (BENCHMARKS.md, issue 14's third
- * section): 2 the best on both clips.
+ * turn and after it. Gates of 1.5, 2, 3 deg and none (BENCHMARKS.md, issue 14's third
+ * section): 2 the best on both clips. Two-view mode only (vo.c): in map mode it made
+ * mvod-synth's whole KITTI 00 drive worse (t_rel 6.3 % -> 11.3 %).
  */
 #define MVOD_GROUND_MAX_TILT_DEG 2.0
 /*
