@@ -181,7 +181,8 @@ void mvod_ground_normal(double pitch_deg, double roll_deg, double n[3])
 void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gate)
 {
 	*f = (struct mvod_scale_filter){.gain = gain, .gate = gate, .since = -1,
-					.ground_n = {0, 1, 0}, .first_n = 1};
+					.ground_n = {0, 1, 0}, .first_n = 1,
+					.max_tilt_deg = MVOD_GROUND_MAX_TILT_DEG};
 }
 
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
@@ -220,7 +221,12 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 	*q = 0;
 	if (mvod_ground_fit(X, n, f->ground_n, MVOD_GROUND_MIN_INLIERS, scratch, &g) != 0)
 		return NAN;
-	mvod_ground_prior_update(f->ground_n, &g);
+	bool level = dot3(f->ground_n, g.n) >= cos(f->max_tilt_deg * M_PI / 180);
+	f->tilted = level ? 0 : f->tilted + 1;
+	if (level || f->since < 0 || f->tilted > MVOD_GROUND_TILTED_RUN)
+		mvod_ground_prior_update(f->ground_n, &g);
+	if (!level)
+		return NAN;
 	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
 	*q = g.inliers / (g.inliers + 20.0);
 	return height_m / g.h;

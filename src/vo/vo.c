@@ -293,6 +293,9 @@ int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera
 	else
 		mvod_scale_filter_init(&vo->scale, HEIGHT_GAIN, HEIGHT_GATE);
 	vo->scale.first_n = params->scale_mode == MVOD_SCALE_MODE_HEIGHT ? HEIGHT_FIRST : 1;
+	/* Map mode: no tilt gate (scale.h, MVOD_GROUND_MAX_TILT_DEG). */
+	if (params->mode == MVOD_VO_MAP)
+		vo->scale.max_tilt_deg = 180;
 	mount(vo, cam);
 	*out = vo;
 	return 0;

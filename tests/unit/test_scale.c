@@ -94,6 +94,51 @@ static void test_ground_prior_learns_pitch(void **state)
 	assert_memory_equal(prior, before, sizeof(before));
 }
 
+/*
+ * Fits of a ground 3 deg from the expected normal until one is a measurement again: fits
+ * calls; r its ratio (metres per unit).
+ */
+static int tilted_fits(struct mvod_scale_filter *f, const double *X, double *scratch, double *r)
+{
+	double q;
+	int fits = 0;
+	*r = NAN;
+	while (isnan(*r) && fits++ < 40)
+		*r = mvod_scale_height_ratio(f, X, 300, 1.6, scratch, &q);
+	return fits;
+}
+
+/*
+ * A ground 3 deg from the expected normal (a turn's kerb and pavement, or an unknown mount):
+ * no measurement. Before the first scale the normal learns from it (the mount); once metric,
+ * it learns nothing for MVOD_GROUND_TILTED_RUN fits in a row, and only then the mount. Within
+ * MVOD_GROUND_MAX_TILT_DEG the exact plane's height (16) comes back, to rounding.
+ */
+static void test_height_tilted_fit(void **state)
+{
+	(void)state;
+	double X[300 * 3], scratch[300], r;
+	const double level[3] = {0, 1, 0};
+	plane_scene(3 * M_PI / 180, X);
+	struct mvod_scale_filter f;
+	mvod_scale_filter_init(&f, 0.5, 0.22);
+	/* 3 deg x 0.9^k is under 2 deg from k = 4 on: the fifth fit measures. */
+	assert_int_equal(tilted_fits(&f, X, scratch, &r), 5);
+	assert_true(fabs(r - 0.1) < 1e-9);
+	mvod_scale_filter_init(&f, 0.5, 0.22);
+	bool used;
+	mvod_scale_filter_step(&f, 1.0, 1.0, &used);
+	assert_true(used && mvod_scale_filter_metric(&f));
+	for (int i = 0; i < MVOD_GROUND_TILTED_RUN; i++) {
+		double q;
+		assert_true(isnan(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q)));
+		assert_memory_equal(f.ground_n, level, sizeof(level));
+	}
+	assert_int_equal(tilted_fits(&f, X, scratch, &r), 5);
+	assert_true(fabs(r - 0.1) < 1e-9);
+	assert_int_equal(f.tilted, 0);
+}
+
 static void test_ground_fit_needs_ground(void **state)
 {
 	(void)state;
@@ -420,6 +465,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_ground_fit_exact_plane),
 		cmocka_unit_test(test_ground_prior_learns_pitch),
+		cmocka_unit_test(test_height_tilted_fit),
 		cmocka_unit_test(test_ground_fit_needs_ground),
 		cmocka_unit_test(test_ground_fit_lowest_plane),
 		cmocka_unit_test(test_filter),
