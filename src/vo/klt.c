@@ -33,15 +33,15 @@
  * only: KITTI 06, 226.0e6 -> 120.6e6 instructions per frame (BENCHMARKS.md, "Initial flow for
  * every track"). The search alone (no refinement) at 9 px failed test_klt.c's turn on
  * mvod-synth's smooth texture, which the refinement at full resolution keeps as precise as
- * before. REFINE_WIN 15 instead of 21 and the backward check on level 0 only (BACK_LEVELS:
+ * before. REFINE_WIN 15 instead of 21 and the backward check on levels 0-1 only (BACK_LEVELS:
  * it starts where the forward result minus the prediction puts it, a few pixels from home at
- * most) cost 92.0e6 -> 76.0e6 per frame, err_avg 06 / 07 0.072 / 0.043 -> 0.068 / 0.043, and
- * test_klt.c's exact correspondences median error 0.091 -> 0.078 px on frame 2
- * (BENCHMARKS.md, "Fewer instructions per KLT frame").
+ * most) cost 92.0e6 -> 79.4e6 per frame, err_avg 06 / 07 0.072 / 0.043 -> 0.069 / 0.044 (map
+ * mode 0.059 / 0.056 -> 0.055 / 0.058). Level 0 alone (76.0e6) cost map mode's 07 0.056 ->
+ * 0.068 (BENCHMARKS.md, "Fewer instructions per KLT frame").
  */
 #define SEARCH_WIN 9
 #define REFINE_WIN 15
-#define BACK_LEVELS 0
+#define BACK_LEVELS 1
 /* A bucket's median displacement predicts its new tracks when it holds this many measured. */
 #define MIN_NEIGHBOURS 3
 /*
