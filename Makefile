@@ -16,7 +16,7 @@ DESTDIR  ?=
 DEBS_RUN := gcc g++ make pkg-config meson ninja-build \
 	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev \
 	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev zlib1g-dev \
-	libinih-dev libsystemd-dev libceres-dev
+	libinih-dev libsystemd-dev libceres-dev libdeflate-dev
 # cmocka: the test suites; clang and its runtime: libFuzzer; valgrind: the memcheck test.
 DEBS_TEST := libcmocka-dev clang libclang-rt-14-dev valgrind
 DEBS_LIBCAMERA := libcamera-dev

@@ -19,6 +19,7 @@
 #include <lcm/eventlog.h>
 
 #include "capture/euroc.h"
+#include "capture/png_grey.h"
 #include "capture/uri.h"
 #include "mvod/board.h"
 #include "mvod/calib.h"
@@ -282,6 +283,21 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (sp)
 		assert(mvod_speed_odometer(sp, 1000000000000000, &metres) <= 0);
 	mvod_speed_destroy(sp);
+#elif defined(FUZZ_PNG_GREY)
+	/* An 8-bit grey PNG: decoded into a buffer of the size it declares, or refused as such. */
+	static struct mvod_png *png; /* one decoder for every input, as for a sequence's frames */
+	int w, h;
+	ret = 0;
+	if (!png)
+		assert(!mvod_png_create(&png));
+	/* Up to 4096 x 4096: larger sizes only test malloc. */
+	if (!mvod_png_grey_size(data, size, &w, &h) && (size_t)w * (size_t)h <= (1u << 24)) {
+		uint8_t *img = malloc((size_t)w * (size_t)h);
+		assert(img);
+		int r = mvod_png_grey_decode(png, data, size, img, (size_t)w);
+		assert(r == 0 || r == -EINVAL || r == -ENOTSUP || r == -ENOMEM);
+		free(img);
+	}
 #else
 #error "fuzz/targets.c: build with -DFUZZ_<NAME> of a target in fuzz/meson.build"
 #endif

@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "capture/png_grey.h"
 #include "util/shim_guard.hpp"
 
 
@@ -113,6 +114,9 @@ struct mvod_imgdec {
 	 * first image then fixes grey or colour for the rest of the sequence.
 	 */
 	int flags = cv::IMREAD_ANYCOLOR | cv::IMREAD_IGNORE_ORIENTATION;
+	struct mvod_png *png = nullptr; /* 8-bit grey PNGs: decoded without OpenCV */
+
+	~mvod_imgdec() { mvod_png_destroy(png); }
 };
 
 extern "C" int mvod_imgdec_create(struct mvod_imgdec **out)
@@ -120,9 +124,31 @@ extern "C" int mvod_imgdec_create(struct mvod_imgdec **out)
 	return mvod_guarded([&] {
 		auto d = std::make_unique<mvod_imgdec>();
 		d->img.allocator = &d->alloc;
+		int ret = mvod_png_create(&d->png);
+		if (ret)
+			return ret;
 		*out = d.release();
 		return 0;
 	});
+}
+
+/*
+ * An 8-bit grey PNG decoded by png_grey.c into d->img's buffer (kept while the size holds),
+ * unless the sequence is colour (its first image was): 0, or -errno to leave it to imdecode,
+ * which then also reports a corrupt image.
+ */
+static int grey_png(struct mvod_imgdec *d, const uint8_t *buf, size_t len)
+{
+	int w, h;
+	if ((d->flags & cv::IMREAD_COLOR) || mvod_png_grey_size(buf, len, &w, &h))
+		return -ENOTSUP;
+	d->img.create(h, w, CV_8UC1);
+	int ret = mvod_png_grey_decode(d->png, buf, len, d->img.data, d->img.step[0]);
+	if (ret)
+		return ret;
+	d->alloc.kept = d->img;
+	d->flags = cv::IMREAD_GRAYSCALE | cv::IMREAD_IGNORE_ORIENTATION;
+	return 0;
 }
 
 extern "C" int mvod_imgdec_decode(struct mvod_imgdec *d, const void *buf, size_t len,
@@ -131,6 +157,8 @@ extern "C" int mvod_imgdec_decode(struct mvod_imgdec *d, const void *buf, size_t
 	if (len == 0 || len > INT_MAX)
 		return -EINVAL;
 	return mvod_guarded([&] {
+		if (!grey_png(d, (const uint8_t *)buf, len))
+			return view_of(d->img, img);
 		cv::Mat raw(1, (int)len, CV_8UC1, const_cast<void *>(buf));
 		d->img.release();
 		cv::imdecode(raw, d->flags, &d->img);
