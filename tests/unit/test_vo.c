@@ -656,6 +656,57 @@ static void test_map_states(void **state)
 	mvod_vo_destroy(vo);
 }
 
+/*
+ * The parallax test's world: points in a cone straight ahead (x and y within +-0.2 of the
+ * depth, depth 20-40 m), so that forward steps of a metre see them within 50 baselines (the
+ * two-view estimate's well-triangulated ones) but under small angles.
+ */
+static void cone_world(void)
+{
+	unsigned s = 99;
+	for (int i = 0; i < POINTS; i++) {
+		double z = 20 + (lcg(&s) % 2000) / 100.0;
+		world[i][0] = z * ((lcg(&s) % 4000) / 10000.0 - 0.2);
+		world[i][1] = z * ((lcg(&s) % 4000) / 10000.0 - 0.2);
+		world[i][2] = z;
+	}
+}
+
+/*
+ * A pair with too little parallax builds no map, however many points it triangulates: the
+ * camera turns 3 deg and moves 1 m forward a frame towards the cone. Frame 1 against frame 0
+ * is a MOTION step for the two-view estimate (rotation-free flow over min_parallax_px, all 400
+ * points inliers within 50 baselines, 4 times INIT_MIN_POINTS) but their median triangulation
+ * angle is under the map's 3 px, so its translation is held and the reference kept; frame 2
+ * (twice the baseline) builds the map, and frames 3-5 track against it. Without the parallax
+ * gate frame 1 builds a map of 400 points (measured).
+ */
+static void test_map_waits_for_parallax(void **state)
+{
+	cone_world();
+	struct mvod_vo *vo = make_vo_in(MVOD_VO_MAP, MVOD_SCALE_MODE_AUTO);
+	struct mvod_pose p = at(0, 0, 0, 0);
+	struct mvod_vo_result r = feed(vo, &p);
+	assert_frame(&r, MVOD_FRAME_FIRST, MVOD_STATE_INITIALIZING);
+	p = at(0, 0, 1, 3);
+	r = feed(vo, &p);
+	assert_frame(&r, MVOD_FRAME_ROTATION, MVOD_STATE_INITIALIZING);
+	assert_true(r.inliers >= 100 && r.map_points == 0);
+	assert_true(mvod_vec3_norm(r.pose.t) == 0);
+	p = at(0, 0, 2, 6);
+	r = feed(vo, &p);
+	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+	assert_true(r.keyframe && r.keyframes == 2 && r.map_points >= 100);
+	for (int i = 3; i < 6; i++) {
+		p = at(0, 0, i, 3 * i);
+		r = feed(vo, &p);
+		assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
+		assert_int_equal(r.scale_source, MVOD_SCALE_MAP);
+	}
+	mvod_vo_destroy(vo);
+	setup_world(state); /* the other tests' world again */
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -672,6 +723,7 @@ int main(void)
 		cmocka_unit_test(test_restart_keeps_pose),
 		cmocka_unit_test(test_seam_refuses_bad_features),
 		cmocka_unit_test(test_map_states),
+		cmocka_unit_test(test_map_waits_for_parallax),
 	};
 	return cmocka_run_group_tests(tests, setup_world, NULL);
 }
