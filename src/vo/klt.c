@@ -29,19 +29,13 @@
 #define EPS_PX 0.03
 /*
  * Tracks with a predicted flow (their own last displacement, or their neighbours') search with
- * a SEARCH_WIN window on the same levels, then refine with a REFINE_WIN window on level 0
- * only: KITTI 06, 226.0e6 -> 120.6e6 instructions per frame (BENCHMARKS.md, "Initial flow for
- * every track"). The search alone (no refinement) at 9 px failed test_klt.c's turn on
- * mvod-synth's smooth texture, which the refinement at full resolution keeps as precise as
- * before. REFINE_WIN 15 instead of 21 and the backward check on levels 0-1 only (BACK_LEVELS:
- * it starts where the forward result minus the prediction puts it, a few pixels from home at
- * most) cost 92.0e6 -> 79.4e6 per frame, err_avg 06 / 07 0.072 / 0.043 -> 0.069 / 0.044 (map
- * mode 0.059 / 0.056 -> 0.055 / 0.058). Level 0 alone (76.0e6) cost map mode's 07 0.056 ->
- * 0.068 (BENCHMARKS.md, "Fewer instructions per KLT frame").
+ * a SEARCH_WIN window on the same levels, then refine with the WIN window on level 0 only:
+ * KITTI 06, 226.0e6 -> 120.6e6 instructions per frame (BENCHMARKS.md, "Initial flow for every
+ * track"). The search alone (no refinement) at 9 px failed test_klt.c's turn on mvod-synth's
+ * smooth texture, which the full window at full resolution keeps as precise as before; the
+ * backward check is not refined (flow()).
  */
 #define SEARCH_WIN 9
-#define REFINE_WIN 15
-#define BACK_LEVELS 1
 /* A bucket's median displacement predicts its new tracks when it holds this many measured. */
 #define MIN_NEIGHBOURS 3
 /*
@@ -345,8 +339,8 @@ static bool predict(struct mvod_klt *k)
 
 /*
  * Lucas-Kanade of n points, from[] to to[] (which holds the guesses), into ok[]: with a
- * predicted flow a SEARCH_WIN search on the pyramid (backward: on BACK_LEVELS), then, forward
- * only, REFINE_WIN on level 0 from its result; without, WIN on every level. The backward pass only checks the forward one
+ * predicted flow a SEARCH_WIN search on the pyramid, then, forward only, WIN on level 0 from
+ * its result; without, WIN on every level. The backward pass only checks the forward one
  * against fb_px: unrefined, KITTI 06 costs 101.6e6 instead of 120.6e6 instructions per frame,
  * err_avg 06 / 07 0.072 / 0.043 against 0.079 / 0.050 (BENCHMARKS.md).
  */
@@ -355,11 +349,10 @@ static int flow(struct mvod_klt *k, int backward, bool predicted, const float *f
 {
 	if (!predicted)
 		return mvod_klt_cv_flow(k->cv, backward, WIN, LEVELS, from, to, n, ok);
-	int ret = mvod_klt_cv_flow(k->cv, backward, SEARCH_WIN, backward ? BACK_LEVELS : LEVELS,
-				   from, to, n, ok);
+	int ret = mvod_klt_cv_flow(k->cv, backward, SEARCH_WIN, LEVELS, from, to, n, ok);
 	if (ret || backward)
 		return ret;
-	ret = mvod_klt_cv_flow(k->cv, backward, REFINE_WIN, 0, from, to, n, k->ok_fine);
+	ret = mvod_klt_cv_flow(k->cv, backward, WIN, 0, from, to, n, k->ok_fine);
 	for (int i = 0; i < n && !ret; i++)
 		ok[i] = ok[i] && k->ok_fine[i];
 	return ret;
