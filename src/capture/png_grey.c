@@ -8,6 +8,12 @@
 
 /* Larger than any camera frame (8K is 7680 x 4320), small enough that sizes cannot overflow. */
 #define MAX_SIDE 65535
+/*
+ * 64 Mpixel (8K is 33): the scratch grows to the largest image seen and stays, so a corrupt
+ * header claiming 65535 x 65535 must not make it 4 GiB; such a header is left to imdecode,
+ * whose own limit (1 Gpixel) and error stand as before this decoder.
+ */
+#define MAX_PIXELS (1u << 26)
 
 struct mvod_png {
 	struct libdeflate_decompressor *inflater;
@@ -61,7 +67,8 @@ int mvod_png_grey_size(const uint8_t *buf, size_t len, int *w, int *h)
 		return -ENOTSUP;
 	const uint8_t *ihdr = buf + 16;
 	uint32_t width = be32(ihdr), height = be32(ihdr + 4);
-	if (width < 1 || height < 1 || width > MAX_SIDE || height > MAX_SIDE || ihdr[8] != 8 ||
+	if (width < 1 || height < 1 || width > MAX_SIDE || height > MAX_SIDE ||
+	    (uint64_t)width * height > MAX_PIXELS || ihdr[8] != 8 ||
 	    ihdr[9] != 0 || ihdr[10] != 0 || ihdr[11] != 0 || ihdr[12] != 0)
 		return -ENOTSUP;
 	*w = (int)width;

@@ -122,6 +122,15 @@ static void test_malformed(void **state)
 		int ret = mvod_png_grey_decode(p, png, cut, out, W);
 		assert_true(ret == -EINVAL || ret == -ENOTSUP);
 	}
+	/* A header claiming 65535 x 1025 (over 64 Mpixel; no CRC is checked) is left to OpenCV. */
+	uint8_t big[CAP];
+	memcpy(big, png, n);
+	memcpy(big + 16, (const uint8_t[]){0, 0, 0xff, 0xff, 0, 0, 4, 1}, 8);
+	assert_int_equal(mvod_png_grey_size(big, n, &w, &h), -ENOTSUP);
+	big[22] = 3; /* 65535 x 769: 50 Mpixel, accepted */
+	assert_int_equal(mvod_png_grey_size(big, n, &w, &h), 0);
+	assert_int_equal(w, 65535);
+	assert_int_equal(h, 769);
 	png[8 + 12 + 13 + 12 + 3 + 8 + 2] ^= 0x55; /* inside the zlib stream: Adler-32 or worse */
 	assert_int_equal(mvod_png_grey_decode(p, png, n, out, W), -EINVAL);
 	mvod_png_destroy(p);
