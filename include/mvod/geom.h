@@ -2,6 +2,8 @@
 #ifndef MVOD_GEOM_H
 #define MVOD_GEOM_H
 
+#include <stdbool.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -28,6 +30,11 @@ void mvod_mat3_vec(const double A[9], const double v[3], double out[3]);
 void mvod_mat3_tvec(const double A[9], const double v[3], double out[3]); /* A^T v */
 /* out = R X + t: a point moved by a rigid motion (out may be X) */
 void mvod_rigid_apply(const double R[9], const double t[3], const double X[3], double out[3]);
+/*
+ * Pixel uv of point c in a pinhole camera's frame, K = fx, fy, cx, cy (no distortion: mvod's
+ * frames are undistorted); false when c is not in front of the camera (z <= 0 or NaN).
+ */
+bool mvod_pinhole_pixel(const double K[4], const double c[3], double uv[2]);
 /*
  * The motion from camera-from-world pose a (Ra, ta) to b (Rb, tb): X_b = R X_a + t, so
  * R = Rb Ra^T and t = tb - R ta. R and t must not alias the inputs.

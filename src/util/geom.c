@@ -53,6 +53,15 @@ void mvod_rigid_apply(const double R[9], const double t[3], const double X[3], d
 		out[k] += t[k];
 }
 
+bool mvod_pinhole_pixel(const double K[4], const double c[3], double uv[2])
+{
+	if (!(c[2] > 0))
+		return false;
+	uv[0] = K[0] * c[0] / c[2] + K[2];
+	uv[1] = K[1] * c[1] / c[2] + K[3];
+	return true;
+}
+
 void mvod_mat3_tvec(const double A[9], const double v[3], double out[3])
 {
 	double tmp[3];

@@ -45,14 +45,13 @@
 static bool reprojects(const double K[4], const double R[9], const double t[3],
 		       const double X[3], const struct mvod_map_kp *kp)
 {
-	double c[3];
-	mvod_mat3_vec(R, X, c);
-	double z = c[2] + t[2];
-	if (!(z > 0))
+	double c[3], uv[2];
+	mvod_rigid_apply(R, t, X, c);
+	if (!mvod_pinhole_pixel(K, c, uv))
 		return false;
 	double s = mvod_mapvo_sigma(kp->octave);
-	double du = (K[0] * (c[0] + t[0]) / z + K[2] - kp->x) / s;
-	double dv = (K[1] * (c[1] + t[1]) / z + K[3] - kp->y) / s;
+	double du = (uv[0] - kp->x) / s;
+	double dv = (uv[1] - kp->y) / s;
 	return du * du + dv * dv <= CHI2_GATE;
 }
 

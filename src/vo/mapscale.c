@@ -37,10 +37,10 @@ static double band_ratio(struct mvod_vo *vo, const struct mvod_map_keyframe *k, 
 		return NAN;
 	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), m = 0;
 	for (int i = 0; i < np && m < vo->cap; i++) {
-		double *X = vo->prev_pts + 3 * m;
+		double *X = vo->prev_pts + 3 * m, uv[2];
 		mvod_rigid_apply(k->Rcw, k->tcw, mvod_map_point(mv->map, mv->ids[i])->pos, X);
-		m += X[2] > 0 && mvod_quad_contains(quad, (float)(mv->K[0] * X[0] / X[2] + mv->K[2]),
-						    (float)(mv->K[1] * X[1] / X[2] + mv->K[3]));
+		m += mvod_pinhole_pixel(mv->K, X, uv) &&
+		     mvod_quad_contains(quad, (float)uv[0], (float)uv[1]);
 	}
 	return mvod_scale_height_ratio(&vo->scale, vo->prev_pts, m, vo->p.camera_height_m,
 				       vo->scratch, q);

@@ -112,13 +112,8 @@ static bool project(const struct mvod_pm *pm, const double R[9], const double t[
 		    const double K[4], const double X[3], double uv[2])
 {
 	double c[3];
-	mvod_mat3_vec(R, X, c);
-	double z = c[2] + t[2];
-	if (!(z > 0))
-		return false;
-	uv[0] = K[0] * (c[0] + t[0]) / z + K[2];
-	uv[1] = K[1] * (c[1] + t[1]) / z + K[3];
-	return uv[0] >= 0 && uv[0] < pm->w && uv[1] >= 0 && uv[1] < pm->h;
+	mvod_rigid_apply(R, t, X, c);
+	return mvod_pinhole_pixel(K, c, uv) && uv[0] >= 0 && uv[0] < pm->w && uv[1] >= 0 && uv[1] < pm->h;
 }
 
 /* Keeps the two smallest distances (and the index of the smallest) of a search. */
