@@ -359,18 +359,18 @@ static int flow(struct mvod_klt *k, int backward, bool predicted, const float *f
 }
 
 /*
- * n points forward from from[] with v[] (displacements) as the initial flow into to[], then
- * back into back[] with v undone as the guess; ok[] and ok_back[] say which converged.
+ * Every track forward from pos with vel (its displacement) as the initial flow into next, then
+ * back into back with vel undone as the guess; ok and ok_back say which converged.
  */
-static int forward_back(struct mvod_klt *k, bool predicted, const float *from, const float *v,
-			float *to, float *back, uint8_t *ok, uint8_t *ok_back, int n)
+static int forward_back(struct mvod_klt *k, bool predicted)
 {
+	int n = k->n;
 	for (int i = 0; i < 2 * n; i++)
-		to[i] = from[i] + v[i];
-	int ret = flow(k, 0, predicted, from, to, n, ok);
+		k->next[i] = k->pos[i] + k->vel[i];
+	int ret = flow(k, 0, predicted, k->pos, k->next, n, k->ok);
 	for (int i = 0; i < 2 * n && !ret; i++)
-		back[i] = to[i] - v[i];
-	return ret ? ret : flow(k, 1, predicted, to, back, n, ok_back);
+		k->back[i] = k->next[i] - k->vel[i];
+	return ret ? ret : flow(k, 1, predicted, k->next, k->back, n, k->ok_back);
 }
 
 /* Track i survives: both ways converged, it came back within fb_px (*fb) and is inside. */
@@ -387,9 +387,7 @@ static bool kept(const struct mvod_klt *k, int i, float *fb)
  */
 static int follow(struct mvod_klt *k)
 {
-	bool predicted = predict(k);
-	int ret = forward_back(k, predicted, k->pos, k->vel, k->next, k->back, k->ok, k->ok_back,
-			       k->n);
+	int ret = forward_back(k, predict(k));
 	if (ret)
 		return ret;
 	int m = 0;
