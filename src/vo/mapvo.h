@@ -125,7 +125,7 @@ int mvod_mapping_ba_settle(struct mvod_mapvo *mv);
 /*
  * --scale height (mapscale.c), at keyframe kf, after its triangulation and before bundle
  * adjustment: lands any running bundle adjustment, measures the camera's height over the road
- * band among the points kf observes and, when the filtered scale says the map's unit has
+ * band among the map's points that project into it from kf and, when the filtered scale says the map's unit has
  * drifted, rescales the map about the current camera (about the origin at the first
  * measurement). 0 or -errno.
  */
