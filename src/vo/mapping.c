@@ -13,7 +13,7 @@
 #include "util/linalg.h"
 
 /* See mapvo.c: a two-view step builds the map from at least this many well-placed points. */
-#define INIT_MIN_POINTS 100
+#define INIT_MIN_POINTS MVOD_MAPVO_INIT_MIN_POINTS
 /*
  * ... and only when their median triangulation angle, in pixels (the angle times the focal
  * length: a point's depth error over its depth is about the pixel noise over this), is at

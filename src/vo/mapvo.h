@@ -92,6 +92,13 @@ void mvod_mapvo_reset(struct mvod_mapvo *mv);
 int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result *res);
 
 /*
+ * A map is built from a two-view step with at least this many well-triangulated points, so a
+ * reference that shares fewer tracks with the current frame can no longer give one: vo.c
+ * moves it on earlier while map mode waits for a map (settle).
+ */
+#define MVOD_MAPVO_INIT_MIN_POINTS 100
+
+/*
  * After a two-view estimate, before the frame settles: when it was a MOTION step with enough
  * well-triangulated points, builds the map from the step's two frames (vo->ref and vo->cur,
  * at vo->pose) and returns 1; else 0. A MOTION step without enough becomes a rotation-only

@@ -293,6 +293,49 @@ static void test_rotation_keeps_reference(void **state)
 	mvod_vo_destroy(vo);
 }
 
+/* Features of a whose world point b sees too. */
+static int shared(const struct view *a, const struct view *b)
+{
+	int n = 0;
+	for (int i = 0; i < a->f.n; i++)
+		for (int j = 0; j < b->f.n; j++)
+			n += a->id[i] == b->id[j];
+	return n;
+}
+
+/*
+ * Map mode waiting for a map keeps a reference only while it shares 2 * the points a map
+ * needs (vo.c's keep_overlap: 200): a frame sharing fewer, though more than two-view's 60,
+ * becomes the reference, so no held step's rotation comes from a thinning overlap. Which
+ * frame is the reference shows in the next frame's match count, as above.
+ */
+static void test_map_wait_moves_reference_on(void **state)
+{
+	struct mvod_vo *vo = make_vo_in(MVOD_VO_MAP, MVOD_SCALE_MODE_AUTO);
+	struct mvod_pose p0 = at(0, 0, 0, 0), yaw = at(0, 0, 0, 1);
+	static struct view all, some;
+	project(&all, &p0);
+	struct mvod_vo_result res = feed_view(vo, &all);
+	/* 200 or more shared: the reference is kept, as two-view mode keeps it. */
+	project_range(&some, &yaw, 0, 300);
+	assert_true(some.f.n >= 200 && some.f.n < all.f.n);
+	res = feed_view(vo, &some);
+	assert_frame(&res, MVOD_FRAME_ROTATION, MVOD_STATE_INITIALIZING);
+	res = feed_view(vo, &all);
+	assert_int_equal(res.matches, all.f.n);
+	/* Between 60 and 200 shared: two-view mode would keep frame 0; map mode moves on. */
+	project_range(&some, &yaw, 0, 150);
+	assert_true(some.f.n >= 60 && some.f.n < 200);
+	res = feed_view(vo, &some);
+	assert_frame(&res, MVOD_FRAME_ROTATION, MVOD_STATE_INITIALIZING);
+	assert_true(fabs(mvod_rot_angle(res.pose.R) * 180 / M_PI - 1) < 1e-3);
+	res = feed_view(vo, &all);
+	assert_int_equal(res.matches, shared(&some, &all));
+	assert_true(res.matches < all.f.n);
+	assert_int_equal(res.map_points, 0);
+	mvod_vo_destroy(vo);
+}
+
 /* Two frames of motion: the VO is TRACKING with a structure-scaled last step. */
 static struct mvod_vo_result start_tracking(struct mvod_vo *vo)
 {
@@ -717,6 +760,7 @@ int main(void)
 		cmocka_unit_test(test_free_scale_unit_step),
 		cmocka_unit_test(test_gt_scale_step),
 		cmocka_unit_test(test_rotation_keeps_reference),
+		cmocka_unit_test(test_map_wait_moves_reference_on),
 		cmocka_unit_test(test_too_few_inliers_is_lost),
 		cmocka_unit_test(test_few_features_keep_reference),
 		cmocka_unit_test(test_held_reference_step_spans_frames),
