@@ -29,9 +29,10 @@
  * turn (320x240, 3.75 deg a frame): with min_matches' margin (60) the reference of frame 29
  * was kept until frame 35, whose 38 inliers gave a rotation 24 deg off, held ever after
  * (rotation error 0.446 deg a frame, max 24.4); with 200 the reference moves on at frame 31
- * (185 matches), the map is rebuilt at 34 from 31 (was 45 from 35) and the worst frame is 0.11 deg off (mean
- * 0.022). 100, 120 and 250 rotate as well (max 0.21 deg) but lose the rebuilt map again at
- * 55. KITTI 06 and 07 never wait with fewer than 200 (trajectories bit-identical).
+ * (185 matches), the map is rebuilt at 34 from 31 (was 45 from 35), and the worst frame is
+ * 0.11 deg off (mean 0.022). 100-250 all rotate as well (max 0.21 deg); with 100, 120 and 250
+ * the map rebuilt at 35 (from 33) is lost again at 55. KITTI 06 and 07 trajectories are
+ * bit-identical in both modes, mvod-synth's KITTI 00 gives the same figures (BENCHMARKS.md).
  */
 static int keep_overlap(const struct mvod_vo *vo)
 {
