@@ -24,6 +24,17 @@
  * KITTI run.
  */
 #define INIT_MIN_PARALLAX_PX 3.0
+/*
+ * ... and not more than this many times the median flow left after the rotation-only fit
+ * (twoview.c's free_parallax_px). A rotation fitted to the flow leaves less of it than the
+ * true one (it absorbs part of a translation's flow), but a wrong rotation adds a whole
+ * parallax of its own: while the car pulls away (KITTI 07, ORB, frames 0-3, 9 cm a frame) the
+ * essential matrix took a rotation 3.25 deg wrong and a sideways translation, triangulated at
+ * 37.7 px where the rotation-only fit left 2.4 (15.8 times), and that map was tracked 35
+ * frames at 40-120 deg of direction error (dir_deg_mean 16.5, err_avg 0.359). Every map
+ * KITTI 06 and 07 built otherwise, either front end, had 0.95-3.9 times.
+ */
+#define INIT_MAX_PARALLAX_RATIO 6.0
 /* Chi-square gate (2 dof, 95 %) on a reprojection error in sigma units, as the shims use. */
 #define CHI2_GATE 5.991
 /*
@@ -218,7 +229,9 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res)
 	speed_over_frames(vo, res);
 	for (int i = 0; i < n; i++)
 		good += vo->cur->has_pt[vo->matches[i].b];
-	if (good < INIT_MIN_POINTS || init_parallax_px(vo, n) < INIT_MIN_PARALLAX_PX) {
+	double par = good ? init_parallax_px(vo, n) : 0;
+	if (good < INIT_MIN_POINTS || par < INIT_MIN_PARALLAX_PX ||
+	    par > INIT_MAX_PARALLAX_RATIO * vo->free_parallax_px) {
 		hold_translation(vo, res);
 		return 0;
 	}

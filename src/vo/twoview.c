@@ -257,7 +257,8 @@ enum mvod_frame_status mvod_twoview_estimate(struct mvod_vo *vo, const double *g
 	struct rotation rot;
 	fit_rotation(vo, n, &rot);
 	bool rot_ok = rot.inliers >= vo->p.min_inliers;
-	if (rot_ok && rotation_free_parallax(vo, rot.R, n) < min_parallax(vo))
+	vo->free_parallax_px = rot_ok ? rotation_free_parallax(vo, rot.R, n) : HUGE_VAL;
+	if (rot_ok && vo->free_parallax_px < min_parallax(vo))
 		return apply_rotation(vo, &rot, res);
 	/* The estimator runs on normalised points; its pixel threshold is scaled to match. */
 	double E[9], R1[9], R2[9], tu[3], R[9], t[3];

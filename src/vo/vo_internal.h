@@ -47,6 +47,11 @@ struct mvod_vo {
 	struct mvod_pose pose; /* last published pose */
 	enum mvod_track_state state;
 	int64_t frames;     /* frames processed, numbering the slots (seq) */
+	/*
+	 * The two-view step's median flow, pixels, left after the rotation-only fit: the pair's
+	 * parallax whatever the essential matrix says; HUGE_VAL when no rotation fits.
+	 */
+	double free_parallax_px;
 	double last_step;   /* the last translation step's length per frame it spanned: speed */
 	int have_step;
 	struct mvod_mapvo *mapvo; /* --mode map (mapvo.h), else NULL */
