@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
@@ -111,9 +112,11 @@ int mvod_video_open(const char *path, struct mvod_video **out)
 }
 
 /*
- * The rules of OpenCV 4.6's FFmpeg reader, which file.c's end-of-stream test was measured with:
- * the average rate, else FFmpeg's guess; the stream's frame count, else the duration (the
- * container's, else the stream's) times that rate.
+ * The stream's average rate, else FFmpeg's guess; its frame count, else the duration (the
+ * container's, else the stream's) times that rate. OpenCV 4.6's reader took r_frame_rate first,
+ * which for a variable-rate file is its time base's (mkvideo's 20/200 ms file: 1000 fps, 6600
+ * frames announced for 60; now 50 fps and 330); file.c's end-of-stream test compares times, so
+ * either is right for it, and every constant-rate file measured gets the same figures.
  */
 void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info)
 {
@@ -153,10 +156,10 @@ static int decode(struct mvod_video *v)
 			avcodec_send_packet(v->dec, NULL);
 			continue;
 		}
+		/* A packet the decoder refuses (corrupt) is skipped, as OpenCV's reader did. */
 		if (v->pkt->stream_index == v->stream)
-			ret = avcodec_send_packet(v->dec, v->pkt); /* corrupt: refused, skipped */
+			(void)avcodec_send_packet(v->dec, v->pkt);
 		av_packet_unref(v->pkt);
-		(void)ret;
 	}
 }
 
@@ -182,14 +185,19 @@ static bool limited_range(const AVFrame *f)
 	return d && d->nb_components >= 3;
 }
 
-/* f as grey into v->grey (w x h, stride w): the luma through the range table, or swscale. */
-static int to_grey(struct mvod_video *v, const AVFrame *f, bool luma)
+/*
+ * f as grey into v->grey (w x h, stride w): the luma copied (a bottom-up plane) or through the
+ * range table (limited), or anything else through swscale.
+ */
+static int to_grey(struct mvod_video *v, const AVFrame *f, bool luma, bool limited)
 {
 	if (luma) {
 		for (int y = 0; y < v->h; y++) {
 			const uint8_t *in = f->data[0] + (ptrdiff_t)y * f->linesize[0];
 			uint8_t *out = v->grey + (size_t)y * (size_t)v->w;
-			for (int x = 0; x < v->w; x++)
+			if (!limited)
+				memcpy(out, in, (size_t)v->w);
+			for (int x = 0; limited && x < v->w; x++)
 				out[x] = v->range[in[x]];
 		}
 		return 0;
@@ -218,12 +226,12 @@ int mvod_video_read(struct mvod_video *v, struct mvod_image *img, int64_t *media
 				   .fmt = MVOD_PIX_GREY, .data = NULL};
 	if (f->width != v->w || f->height != v->h)
 		return -EMSGSIZE;
-	bool luma = luma_plane(f->format);
-	if (luma && !limited_range(f) && f->linesize[0] > 0) {
+	bool luma = luma_plane(f->format), limited = luma && limited_range(f);
+	if (luma && !limited && f->linesize[0] > 0) {
 		img->data = f->data[0]; /* the decoder's plane, as it is */
 		return 0;
 	}
-	ret = to_grey(v, f, luma);
+	ret = to_grey(v, f, luma, limited);
 	if (ret)
 		return ret;
 	img->stride = v->w;

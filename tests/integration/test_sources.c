@@ -81,9 +81,10 @@ static void run_video(const char *name, const char *codec, const char *const *fr
 }
 
 /*
- * Frames 20 ms and 200 ms apart in turn: FFmpeg's nominal rate is then the 1 kHz time base
- * and OpenCV announces 6600 frames for the 60 there are. The file is whole: every frame comes
- * out, at its container time, and the run succeeds.
+ * Frames 20 ms and 200 ms apart in turn: the container's average rate is then 50 fps, so its
+ * 6.6 s announce 330 frames for the 60 there are (OpenCV's reader took the 1 kHz time base's
+ * rate: 6600). The file is whole: every frame comes out, at its container time, and the run
+ * succeeds.
  */
 static void test_variable_frame_rate(void **state)
 {
@@ -104,7 +105,7 @@ static void test_variable_frame_rate(void **state)
 	char err[256];
 	assert_int_equal(mvod_traj_load(traj, &tr, err, sizeof(err)), 0);
 	assert_int_equal(tr.n, 60);
-	/* The container's times (the first frame's, 20 ms, is OpenCV's 0); 1 us of rounding. */
+	/* Container times from the stream's start (the first frame's 20 ms is 0); 1 us of rounding. */
 	assert_true(fabs(tr.t[5] - tr.t[4] - 0.200) < 1e-6);
 	assert_true(fabs(tr.t[59] - tr.t[0] - 6.580) < 1e-6);
 	mvod_traj_free(&tr);
