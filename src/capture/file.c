@@ -125,8 +125,8 @@ static int decode_next(struct file_source *fs, struct mvod_frame *frame)
 		return ret;
 	frame->index = fs->next++;
 	/*
-	 * OpenCV reports 0 ms for the frames FFmpeg flushes out of a B-frame decoder at the end
-	 * of the stream; a time that does not advance is taken one period after the last.
+	 * A time that does not advance (a container without times gives 0 for every frame) is
+	 * taken one period after the last.
 	 */
 	bool advances = frame->index == 0 || media_us > fs->last_us;
 	frame->utime = advances ? media_us : fs->last_us + fs->period_us;

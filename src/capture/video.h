@@ -27,8 +27,10 @@ void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info);
 /*
  * The next frame in presentation order, grey, at the size it was coded at, and its media time
  * in microseconds from the stream's start (0 when the container gives none). Packets the
- * decoder refuses (corrupt) are skipped. -ENODATA when the decoder delivers no further frame,
- * whether the stream ended or broke off: only the caller, knowing the frame count, can tell.
+ * decoder refuses (corrupt) are skipped. -EMSGSIZE for a frame not of the size props gave (a
+ * resolution change mid-stream): img has its size and no pixels, media_us its time. -ENODATA
+ * when the decoder delivers no further frame, whether the stream ended or broke off: only the
+ * caller, knowing the frame count, can tell.
  */
 int mvod_video_read(struct mvod_video *v, struct mvod_image *img, int64_t *media_us);
 /* NULL is a no-op. */
