@@ -15,7 +15,8 @@ DESTDIR  ?=
 # when it is installed (-Dlibcamera=auto) and goes on without it.
 DEBS_RUN := gcc g++ make pkg-config meson ninja-build \
 	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev \
-	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev zlib1g-dev \
+	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev libavutil-dev \
+	libswscale-dev zlib1g-dev \
 	libinih-dev libsystemd-dev libceres-dev libdeflate-dev
 # cmocka: the test suites; clang and its runtime: libFuzzer; valgrind: the memcheck test.
 DEBS_TEST := libcmocka-dev clang libclang-rt-14-dev valgrind
@@ -138,7 +139,7 @@ demo: build
 # Seconds, not part of make test.
 ARM64DIR ?= build-arm64
 ARM64_DEBS := gcc-aarch64-linux-gnu qemu-user-static libcmocka-dev:arm64 \
-	libjpeg62-turbo-dev:arm64 libavcodec-dev:arm64
+	libjpeg62-turbo-dev:arm64 libavcodec-dev:arm64 libavformat-dev:arm64 libswscale-dev:arm64
 ARM64_CC := aarch64-linux-gnu-gcc -std=c11 -D_GNU_SOURCE -O2 -Wall -Werror -Iinclude -Isrc \
 	-I$(BUILDDIR)/lcmtypes -I/usr/include/libxml2
 # test name:the sources it tests (the Hamming distance is header-only)

@@ -1,5 +1,5 @@
 /*
- * file:PATH[?realtime=1], any video FFmpeg reads, decoded through the OpenCV shim. realtime=1
+ * file:PATH[?realtime=1], any video FFmpeg reads, decoded to grey by video.c. realtime=1
  * hands frames out no faster than their media times, as a camera would, so that the live path
  * (capture thread, mailbox, dropped frames) runs without one.
  */
@@ -13,8 +13,7 @@
 #include <unistd.h>
 
 #include "capture/uri.h"
-#include "capture/video_shim.h"
-#include "capture/video_size.h"
+#include "capture/video.h"
 #include "util/clock.h"
 #include "util/output.h"
 
@@ -31,8 +30,6 @@
 
 struct file_source {
 	struct mvod_video *video;
-	struct mvod_vsize *sizes; /* each frame's coded size; NULL when it cannot change */
-	int coded_w, coded_h;     /* the first frame's, 0 before it or when the stream is silent */
 	struct mvod_source_info info;
 	int64_t next;      /* index of the next frame */
 	int64_t last_us;   /* time of the previous frame */
@@ -102,9 +99,6 @@ static int file_open(void *priv, const char *location, char *err, size_t errlen)
 	fs->end_us = fs->info.fps > 0 && fs->info.frames > 0
 			     ? llround((double)fs->info.frames * 1e6 / fs->info.fps) : -1;
 	fs->info.live = fs->realtime;
-	/* Without a parser for the codec its size cannot change in-band: nothing to watch. */
-	if (mvod_vsize_open(path, &fs->sizes) < 0)
-		fs->sizes = NULL;
 	return 0;
 fail:
 	mvod_video_close(fs->video);
@@ -121,40 +115,25 @@ static int stream_end(const struct file_source *fs)
 	return short_of_count && short_of_time ? -EIO : -ENODATA;
 }
 
-/*
- * A frame whose coded size differs from the first frame's: OpenCV squeezes it into the first
- * size's buffer (see video_size.h), so it is bad, and skipped, whatever its pixels show.
- */
-static bool resized(struct file_source *fs)
-{
-	int w = 0, h = 0;
-	if (!fs->sizes || mvod_vsize_next(fs->sizes, &w, &h) < 0 || w <= 0 || h <= 0)
-		return false;
-	if (!fs->coded_w) {
-		fs->coded_w = w;
-		fs->coded_h = h;
-	}
-	return w != fs->coded_w || h != fs->coded_h;
-}
-
 static int decode_next(struct file_source *fs, struct mvod_frame *frame)
 {
 	int64_t media_us = 0;
 	int ret = mvod_video_read(fs->video, &frame->img, &media_us);
 	if (ret == -ENODATA)
 		return stream_end(fs);
-	if (ret < 0)
+	if (ret < 0 && ret != -EMSGSIZE)
 		return ret;
 	frame->index = fs->next++;
 	/*
-	 * OpenCV reports 0 ms for the frames FFmpeg flushes out of a B-frame decoder at the end
-	 * of the stream; a time that does not advance is taken one period after the last.
+	 * A time that does not advance (a container without times gives 0 for every frame) is
+	 * taken one period after the last.
 	 */
 	bool advances = frame->index == 0 || media_us > fs->last_us;
 	frame->utime = advances ? media_us : fs->last_us + fs->period_us;
 	fs->last_us = frame->utime;
-	if (!resized(fs))
+	if (ret == 0)
 		return 0;
+	/* Not the stream's size: the queue's letters hold that size, and VO wants one size. */
 	frame->bad = MVOD_BAD_SIZE;
 	return -EINVAL;
 }
@@ -188,7 +167,7 @@ static int paced_read(struct file_source *fs, struct mvod_frame *frame)
 
 static int file_read(void *priv, struct mvod_frame *frame, const struct mvod_image *into)
 {
-	(void)into; /* FFmpeg and OpenCV decode into their own buffer */
+	(void)into; /* FFmpeg decodes into its own buffer; capture.c copies it into the letter */
 	struct file_source *fs = priv;
 	return fs->realtime ? paced_read(fs, frame) : decode_next(fs, frame);
 }
@@ -202,7 +181,6 @@ static void file_info(void *priv, struct mvod_source_info *info)
 static void file_close(void *priv)
 {
 	struct file_source *fs = priv;
-	mvod_vsize_close(fs->sizes);
 	mvod_video_close(fs->video);
 }
 

@@ -7,7 +7,6 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
 
 #include "capture/png_grey.h"
 #include "util/shim_guard.hpp"
@@ -21,54 +20,6 @@ static int view_of(cv::Mat &m, struct mvod_image *img)
 	*img = {m.cols, m.rows, (int)m.step[0], m.channels() == 1 ? MVOD_PIX_GREY : MVOD_PIX_BGR,
 		m.data};
 	return 0;
-}
-
-struct mvod_video {
-	cv::VideoCapture cap;
-	cv::Mat frame; /* VideoCapture::read decodes into it in place while the size holds */
-};
-
-extern "C" int mvod_video_open(const char *path, struct mvod_video **out)
-{
-	return mvod_guarded([&] {
-		auto v = std::make_unique<mvod_video>();
-		if (!v->cap.open(path, cv::CAP_FFMPEG))
-			return -EINVAL;
-		*out = v.release();
-		return 0;
-	});
-}
-
-extern "C" void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info)
-{
-	*info = {0, 0, 0.0, -1, false, NAN, false, false};
-	(void)mvod_guarded([&] {
-		info->width = (int)v->cap.get(cv::CAP_PROP_FRAME_WIDTH);
-		info->height = (int)v->cap.get(cv::CAP_PROP_FRAME_HEIGHT);
-		double fps = v->cap.get(cv::CAP_PROP_FPS);
-		info->fps = std::isfinite(fps) && fps > 0 ? fps : 0.0;
-		/* FFmpeg reports 0 or garbage for streams that do not declare a length. */
-		double n = v->cap.get(cv::CAP_PROP_FRAME_COUNT);
-		info->frames = n >= 1 && n < 1e15 ? (int64_t)n : -1;
-		return 0;
-	});
-}
-
-extern "C" int mvod_video_read(struct mvod_video *v, struct mvod_image *img, int64_t *media_us)
-{
-	return mvod_guarded([&] {
-		if (!v->cap.read(v->frame))
-			return -ENODATA;
-		/* After a read, POS_MSEC is the presentation time of the frame just decoded. */
-		double ms = v->cap.get(cv::CAP_PROP_POS_MSEC);
-		*media_us = std::isfinite(ms) ? std::llround(ms * 1000.0) : 0;
-		return view_of(v->frame, img);
-	});
-}
-
-extern "C" void mvod_video_close(struct mvod_video *v)
-{
-	delete v;
 }
 
 /*

@@ -1,0 +1,140 @@
+/*
+ * The file: source's video reader (src/capture/video.c) through the capture thread and its
+ * queue, on videos mkvideo writes with a known pattern: every frame exactly once, in order, at
+ * its container time, every pixel checked. Grey video hands over its luma plane as it is;
+ * limited-range YUV is expanded to full range and colour converted to grey, which is what the
+ * OpenCV reader used before gave after mvod's BGR -> grey (measured on these files: equal for
+ * grey, within 1 for YUV and bgr0, the rounding of swscale's fixed-point YUV -> BGR).
+ */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "harness.h"
+#include "mvod/capture.h"
+
+/* Three times the capture queue's depth (4): the capture thread has to wait for room. */
+#define FRAMES 12
+#define W 64
+#define H 48
+#define PERIOD_MS 40
+
+/* mkvideo's pattern (tests/tools/mkvideo.c): the luma, or R of bgr0. */
+static int level(int x, int y, int i)
+{
+	return (uint8_t)((x * 7 + y * 3 + i * 5) ^ (x * y));
+}
+
+/* Limited-range Y' (16..235) to full range, rounded and clamped. */
+static int expanded(int y)
+{
+	long g = lround((y - 16) * 255.0 / 219.0);
+	return g < 0 ? 0 : g > 255 ? 255 : (int)g;
+}
+
+/* BT.601 luma of mkvideo's bgr0 pixel (R = level, G = level ^ 0x5a, B = 255 - level). */
+static double luma_bgr(int r)
+{
+	return 0.299 * r + 0.587 * (r ^ 0x5a) + 0.114 * (255 - r);
+}
+
+/* FRAMES frames of WxH, PERIOD_MS apart, as codec[:pixfmt] into name; returns its path. */
+static const char *make(const char *name, const char *codec)
+{
+	static char spec[FRAMES][32];
+	char *argv[FRAMES + 4] = {(char *)harness_bin("MVOD_MKVIDEO"),
+				  (char *)harness_tmp_path(name), (char *)codec};
+	for (int i = 0; i < FRAMES; i++) {
+		snprintf(spec[i], sizeof(spec[i]), "%dx%d@%d", W, H, i * PERIOD_MS);
+		argv[3 + i] = spec[i];
+	}
+	argv[3 + FRAMES] = NULL;
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status)
+		fail_msg("mkvideo %s failed: %s", codec, r.err);
+	return argv[1];
+}
+
+/* Pixel (x, y) of frame i off by at most tol from what kind says it must be. */
+static void check_pixel(const struct mvod_frame *f, int x, int y, int i, char kind, double tol)
+{
+	int got = f->img.data[y * f->img.stride + x];
+	int p = level(x, y, i);
+	double want = kind == 'g' ? p : kind == 'y' ? expanded(p) : luma_bgr(p);
+	if (fabs(got - want) > tol)
+		fail_msg("frame %d (%d, %d): %d, want %.2f", i, x, y, got, want);
+}
+
+/* Every frame of path through the capture thread once, in order, then -ENODATA. */
+static void drain(const char *path, char kind, double tol)
+{
+	char uri[600], err[512] = "";
+	snprintf(uri, sizeof(uri), "file:%s", path);
+	struct mvod_source *src = NULL;
+	if (mvod_source_open(uri, &src, err, sizeof(err)))
+		fail_msg("%s: %s", uri, err);
+	struct mvod_capture *cap = NULL;
+	assert_int_equal(mvod_capture_start(src, uri, &cap), 0);
+	struct mvod_frame f;
+	int epoch, ret;
+	for (int i = 0; i < FRAMES; i++) {
+		while ((ret = mvod_capture_next(cap, 1000, &f, &epoch)) == -EAGAIN)
+			;
+		assert_int_equal(ret, 0);
+		assert_int_equal(f.index, i);
+		assert_int_equal(f.utime, (int64_t)i * PERIOD_MS * 1000);
+		assert_int_equal(f.img.w, W);
+		assert_int_equal(f.img.h, H);
+		assert_int_equal(f.img.fmt, MVOD_PIX_GREY);
+		for (int y = 0; y < H; y++)
+			for (int x = 0; x < W; x++)
+				check_pixel(&f, x, y, i, kind, tol);
+	}
+	while ((ret = mvod_capture_next(cap, 1000, &f, &epoch)) == -EAGAIN)
+		;
+	assert_int_equal(ret, -ENODATA);
+	mvod_capture_stop(cap);
+}
+
+/* Lossless grey (mvod-synth's kind of file): the decoder's luma plane, every pixel exact. */
+static void test_grey(void **state)
+{
+	(void)state;
+	drain(make("grey.mkv", "ffv1:gray"), 'g', 0);
+}
+
+/*
+ * Lossless YUV 4:2:0 without a range flag, so limited range: Y' expanded by the table, exact
+ * (the table's rounding is the reference; OpenCV's fixed-point path was within 1 of it).
+ */
+static void test_yuv(void **state)
+{
+	(void)state;
+	drain(make("yuv.mkv", "ffv1:yuv420p"), 'y', 0);
+}
+
+/* Lossless colour (packed BGR): grey by swscale, within 1 of BT.601 luma (its fixed point). */
+static void test_colour(void **state)
+{
+	(void)state;
+	drain(make("bgr.mkv", "ffv1:bgr0"), 'c', 1.0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_grey),
+		cmocka_unit_test(test_yuv),
+		cmocka_unit_test(test_colour),
+	};
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
+}
