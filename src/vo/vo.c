@@ -254,6 +254,7 @@ static void mount(struct mvod_vo *vo, const struct mvod_camera *cam)
 	if (!(vo->p.camera_height_m > 0))
 		vo->p.camera_height_m = cam->mount_height_m;
 	mvod_ground_normal(cam->mount_pitch_deg, cam->mount_roll_deg, vo->scale.ground_n);
+	vo->scale.normal_fits = MVOD_GROUND_MOUNT_FITS;
 }
 
 int mvod_vo_create(const struct mvod_vo_params *params, const struct mvod_camera *cam,

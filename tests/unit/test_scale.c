@@ -111,8 +111,9 @@ static int tilted_fits(struct mvod_scale_filter *f, const double *X, double *scr
 /*
  * A ground 3 deg from the expected normal (a turn's kerb and pavement, or an unknown mount):
  * no measurement. Before the first scale the normal learns from it (the mount); once metric,
- * it learns nothing for MVOD_GROUND_TILTED_RUN fits in a row, and only then the mount. Within
- * MVOD_GROUND_MAX_TILT_DEG the exact plane's height (16) comes back, to rounding.
+ * it learns nothing for MVOD_GROUND_TILTED_RUN fits in a row, and only then the mount. The
+ * first fit learnt sets the normal whole (the mean of the fits so far: gain 1), so the next
+ * fit measures the exact plane's height (16), to rounding.
  */
 static void test_height_tilted_fit(void **state)
 {
@@ -122,8 +123,7 @@ static void test_height_tilted_fit(void **state)
 	plane_scene(3 * M_PI / 180, X);
 	struct mvod_scale_filter f;
 	mvod_scale_filter_init(&f, 0.5, 0.22);
-	/* 3 deg x 0.9^k is under 2 deg from k = 4 on: the fifth fit measures. */
-	assert_int_equal(tilted_fits(&f, X, scratch, &r), 5);
+	assert_int_equal(tilted_fits(&f, X, scratch, &r), 2);
 	assert_true(fabs(r - 0.1) < 1e-9);
 	mvod_scale_filter_init(&f, 0.5, 0.22);
 	bool used;
@@ -134,7 +134,7 @@ static void test_height_tilted_fit(void **state)
 		assert_true(isnan(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q)));
 		assert_memory_equal(f.ground_n, level, sizeof(level));
 	}
-	assert_int_equal(tilted_fits(&f, X, scratch, &r), 5);
+	assert_int_equal(tilted_fits(&f, X, scratch, &r), 2);
 	assert_true(fabs(r - 0.1) < 1e-9);
 	assert_int_equal(f.tilted, 0);
 }
@@ -402,11 +402,10 @@ static void test_height_without_ground(void **state)
 }
 
 /*
- * No --camera-height: the camera file's mount gives it. Its pitch, 1.5 deg off the level
- * ground's, is only the normal's first estimate: the fit's pitch search (+-4 deg in 0.5 deg
- * steps) finds the level ground, so the step is exact as with the flag (0.1 %, float pixels).
- * A --camera-height given wins over the mount: 0.8 of the ground's height makes steps 0.8
- * times as long.
+ * No --camera-height: the camera file's mount gives it, and its pitch the normal the height is
+ * measured along (at the inliers' centroid): the mount's exact level gives the exact step (0.1 %,
+ * float pixels). A --camera-height given wins over the mount: 0.8 of the ground's height makes
+ * steps 0.8 times as long.
  */
 static void test_height_from_mount(void **state)
 {
@@ -414,7 +413,6 @@ static void test_height_from_mount(void **state)
 	struct mvod_camera mounted = cam;
 	mounted.has_mount = true;
 	mounted.mount_height_m = GROUND_Y;
-	mounted.mount_pitch_deg = 1.5;
 	for (int flag = 0; flag < 2; flag++) {
 		double expect = flag ? 0.8 * 0.8 : 0.8;
 		struct mvod_vo *vo =
@@ -426,6 +424,34 @@ static void test_height_from_mount(void **state)
 		assert_true(fabs(res.step_m - expect) < 1e-3 * expect);
 		mvod_vo_destroy(vo);
 	}
+}
+
+/*
+ * A mount pitched 1.5 deg off the level ground is only the normal's first estimate: the
+ * fit's pitch search (+-4 deg in 0.5 deg steps) finds the level ground, and the normal learns
+ * it at MVOD_GROUND_NORMAL_GAIN a fit (the mount counting as MVOD_GROUND_MOUNT_FITS fits).
+ * Until then the height along it is off (~10 % a degree, at the centroid 4-25 m ahead): the
+ * first metric step is 15 % short here, and the steps approach the truth, 0.035 % short at the
+ * 60th frame (0.2 m a frame; the bound 0.1 %, float pixels).
+ */
+static void test_height_mount_pitch_learnt(void **state)
+{
+	(void)state;
+	struct mvod_camera mounted = cam;
+	mounted.has_mount = true;
+	mounted.mount_height_m = GROUND_Y;
+	mounted.mount_pitch_deg = 1.5;
+	struct mvod_vo *vo = make_vo_on(MVOD_SCALE_MODE_HEIGHT, &mounted, 0);
+	struct mvod_vo_result res;
+	double first_err = NAN;
+	for (int k = 0; k <= 60; k++) {
+		res = feed(vo, 0.2 * k, 0, POINTS);
+		if (isnan(first_err) && res.scale_source == MVOD_SCALE_HEIGHT)
+			first_err = fabs(res.step_m - 0.2);
+	}
+	assert_true(first_err > 0.05 * 0.2); /* the mount's pitch matters at first */
+	assert_true(fabs(res.step_m - 0.2) < 1e-3 * 0.2);
+	mvod_vo_destroy(vo);
 }
 
 /*
@@ -474,6 +500,7 @@ int main(void)
 		cmocka_unit_test(test_height_metric_from_first_step),
 		cmocka_unit_test(test_height_without_ground),
 		cmocka_unit_test(test_height_from_mount),
+		cmocka_unit_test(test_height_mount_pitch_learnt),
 		cmocka_unit_test(test_external_odometer),
 	};
 	return cmocka_run_group_tests(tests, setup_world, NULL);
