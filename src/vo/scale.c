@@ -240,8 +240,9 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 		learn_normal(f->ground_n, &g, fmax(gain, MVOD_GROUND_NORMAL_GAIN));
 		f->normal_fits++;
 	}
+	/* A tilted fit still measures: along the expected normal its tilt costs nothing. */
 	double h = dot3(f->ground_n, g.c);
-	if (!level || !(h > 0))
+	if (!(h > 0))
 		return NAN;
 	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
 	*q = g.inliers / (g.inliers + 20.0);
