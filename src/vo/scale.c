@@ -111,6 +111,7 @@ static bool refit_normal(const double *X, int n, const double prior[3], struct m
 	for (int k = 0; k < 3; k++)
 		g->n[k] = sign * Vt[6 + k];
 	g->h = dot3(g->n, c);
+	memcpy(g->c, c, sizeof(g->c));
 	return true;
 }
 
@@ -158,16 +159,22 @@ int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inlie
 	return refit_normal(X, n, np, g) ? 0 : -ENODATA;
 }
 
-void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g)
+/* prior moved towards g's normal by gain when within MVOD_GROUND_MAX_TURN_DEG, unit again. */
+static void learn_normal(double prior[3], const struct mvod_ground *g, double gain)
 {
 	if (dot3(prior, g->n) < cos(MVOD_GROUND_MAX_TURN_DEG * M_PI / 180))
 		return;
 	double len = 0;
 	for (int k = 0; k < 3; k++)
-		prior[k] += MVOD_GROUND_NORMAL_GAIN * (g->n[k] - prior[k]);
+		prior[k] += gain * (g->n[k] - prior[k]);
 	len = sqrt(dot3(prior, prior));
 	for (int k = 0; k < 3; k++)
 		prior[k] /= len;
+}
+
+void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g)
+{
+	learn_normal(prior, g, MVOD_GROUND_NORMAL_GAIN);
 }
 
 void mvod_ground_normal(double pitch_deg, double roll_deg, double n[3])
@@ -223,13 +230,23 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 		return NAN;
 	bool level = dot3(f->ground_n, g.n) >= cos(f->max_tilt_deg * M_PI / 180);
 	f->tilted = level ? 0 : f->tilted + 1;
-	if (level || f->since < 0 || f->tilted > MVOD_GROUND_TILTED_RUN)
-		mvod_ground_prior_update(f->ground_n, &g);
-	if (!level)
+	if (level || f->since < 0 || f->tilted > MVOD_GROUND_TILTED_RUN) {
+		/*
+		 * The mean of the first fits, then a slow average: from the level guess at 0.1 a
+		 * fit, KITTI 06's normal was still 0.4 deg below its fits' mean (1.0 deg) after 20
+		 * fits, and its two-view steps ran 7.5 % long (mean log ratio to the truth).
+		 */
+		double gain = 1.0 / (f->normal_fits + 1);
+		learn_normal(f->ground_n, &g, fmax(gain, MVOD_GROUND_NORMAL_GAIN));
+		f->normal_fits++;
+	}
+	/* A tilted fit still measures: along the expected normal its tilt costs nothing. */
+	double h = dot3(f->ground_n, g.c);
+	if (!(h > 0))
 		return NAN;
 	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
 	*q = g.inliers / (g.inliers + 20.0);
-	return height_m / g.h;
+	return height_m / h;
 }
 
 bool mvod_scale_filter_metric(const struct mvod_scale_filter *f)

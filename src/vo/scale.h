@@ -15,6 +15,7 @@ struct mvod_ground {
 	double h;     /* the camera's height above them along the expected normal, in the
 			 points' unit (> 0) */
 	int inliers;  /* points within the inlier band */
+	double c[3];  /* their centroid, in the points' unit */
 };
 
 /*
@@ -35,8 +36,15 @@ int mvod_ground_fit(const double *X, int n, const double prior[3], int min_inlie
  * Moves the expected normal (camera pitch and roll) towards a fit's by MVOD_GROUND_NORMAL_GAIN
  * when within MVOD_GROUND_MAX_TURN_DEG of it: a slow estimate of the mount's pitch that
  * follows a car's pitching under braking (~1 deg over a second) and not one frame's noise.
+ * The scale filter's own learning (mvod_scale_height_ratio) averages its first fits instead
+ * (gain 1/k for the k-th, down to this gain), unless a mount was given (MVOD_GROUND_MOUNT_FITS).
  */
 #define MVOD_GROUND_NORMAL_GAIN 0.1
+/*
+ * A mount from the camera file counts as this many fits already learnt: the normal then
+ * learns at MVOD_GROUND_NORMAL_GAIN from the first fit on (1 / (9 + 1)).
+ */
+#define MVOD_GROUND_MOUNT_FITS 9
 #define MVOD_GROUND_MAX_TURN_DEG 5.0
 void mvod_ground_prior_update(double prior[3], const struct mvod_ground *g);
 /*
@@ -86,6 +94,9 @@ struct mvod_scale_filter {
 	double max_tilt_deg; /* --scale height: MVOD_GROUND_MAX_TILT_DEG at init; 180: none */
 	int tilted;     /* --scale height: ground fits in a row tilted beyond max_tilt_deg
 			   from ground_n */
+	int normal_fits; /* --scale height: fits ground_n has learnt from (MVOD_GROUND_MOUNT_FITS
+			    from a mount); the next moves it by 1 / (normal_fits + 1), at least
+			    MVOD_GROUND_NORMAL_GAIN */
 	/*
 	 * The first scale is the median of this many measurements (1 at init, at most
 	 * MVOD_SCALE_FIRST_MAX); until then the output is not metric. Their ratios are alike:
@@ -109,13 +120,15 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
  */
 #define MVOD_GROUND_MIN_INLIERS 20
 /*
- * A ground fit whose own normal is more than this from the expected one is no measurement, and
- * the expected normal does not learn from it. On KITTI 07 the fits' pitch was 1.9 deg on
- * average (sd 1.3) on straight road and 4.0 deg (sd 2.7) in its two turns (3-4 deg of yaw a
- * frame: the band's far part on the kerb and pavement inside the bend); taken, they pitched the
- * expected normal 4.5 deg and made each height 10-30 % high (steps short) through the second
- * turn and after it. Gates of 1.5, 2, 3 deg and none (BENCHMARKS.md, issue 14's third
- * section): 2 the best on both clips. Two-view mode only (vo.c): in map mode it made
+ * The expected normal does not learn from a ground fit whose own normal is more than this from
+ * it (its height along the expected normal still counts). On KITTI 07 the fits' pitch was
+ * 1.9 deg on average (sd 1.3) on straight road and 4.0 deg (sd 2.7) in its two turns (3-4 deg
+ * of yaw a frame: the band's far part on the kerb and pavement inside the bend); learnt, they
+ * pitched the expected normal 4.5 deg and made each height 10-30 % high (steps short) through
+ * the second turn and after it. Gates of 1.5, 2, 3 deg and none (BENCHMARKS.md, issue 14's
+ * third section): 2 the best on both clips. While heights were the fit's own plane's, a
+ * tilted fit was no measurement either; along the expected normal it is one (KITTI 07
+ * two-view scale drift 1.123 -> 1.097). Two-view mode only (vo.c): in map mode it made
  * mvod-synth's whole KITTI 00 drive worse (t_rel 6.3 % -> 11.3 %).
  */
 #define MVOD_GROUND_MAX_TILT_DEG 2.0
@@ -131,9 +144,16 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
 /*
  * --scale height's measurement: the ground among the n road-band points X (n x 3, camera
  * frame, any unit), fitted along f's expected normal, which then learns from it. Returns
- * height_m over the fitted height (metres per unit of X), NAN when no ground was found or
- * the fit was tilted (MVOD_GROUND_MAX_TILT_DEG); *q the fit's quality (0-1). scratch holds n
- * doubles.
+ * height_m over the inliers' height (metres per unit of X), NAN when no ground was found;
+ * *q the fit's quality (0-1). scratch holds n doubles.
+ *
+ * The height is the inliers' centroid along the expected normal, not the distance of their
+ * own least-squares plane: that plane's tilt is noisy (the far band points are the noisiest)
+ * and its distance is its value extrapolated from the band (2-15 heights ahead) back to the
+ * camera, so each degree of tilt moved it by ~9 % (KITTI 06 and 07 two-view: the log error
+ * of each step's ratio against the truth correlated with the fit's pitch at -0.91 and -0.61,
+ * slope -0.11 and -0.08 per degree). At the centroid a tilt costs nothing; the expected
+ * normal, learnt over many fits, carries the pitch.
  */
 double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int n,
 			       double height_m, double *scratch, double *q);
