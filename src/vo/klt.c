@@ -176,21 +176,27 @@ static bool inside(const struct mvod_klt *k, float x, float y)
 	return x >= BORDER && y >= BORDER && x <= k->w - 1 - BORDER && y <= k->h - 1 - BORDER;
 }
 
-/* Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. */
+/*
+ * Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. The
+ * sums are integers (each term at most 255^2, 49 of them under 2^24), so summing them as int
+ * gives the float sums exactly (the same scores) at 73 % of the instructions (callgrind, KITTI 06,
+ * 20 frames: 93.3e6 -> 68.2e6 in harris()).
+ */
 static float harris(const struct mvod_image *g, int x, int y)
 {
-	float a = 0, b = 0, c = 0;
+	int32_t a = 0, b = 0, c = 0;
 	for (int dy = -3; dy <= 3; dy++) {
 		const uint8_t *r = g->data + (size_t)(y + dy) * (size_t)g->stride + x;
 		for (int dx = -3; dx <= 3; dx++) {
-			float ix = (float)r[dx + 1] - r[dx - 1];
-			float iy = (float)r[dx + g->stride] - r[dx - g->stride];
+			int32_t ix = r[dx + 1] - r[dx - 1];
+			int32_t iy = r[dx + g->stride] - r[dx - g->stride];
 			a += ix * ix;
 			b += iy * iy;
 			c += ix * iy;
 		}
 	}
-	return a * b - c * c - 0.04f * (a + b) * (a + b);
+	float fa = (float)a, fb = (float)b, fc = (float)c;
+	return fa * fb - fc * fc - 0.04f * (fa + fb) * (fa + fb);
 }
 
 /*
