@@ -285,7 +285,8 @@ static void add_corners(struct mvod_klt *k, int nc, int quota)
 /*
  * Tops the tracks up with FAST corners ranked by Harris score: first each grid bucket up to
  * its share of max_tracks, so that no part of the image is left without tracks, then the
- * strongest of the rest anywhere.
+ * strongest of the rest anywhere. A corner in a cell a track holds is never taken
+ * (add_corners), so it is neither scored nor sorted.
  */
 static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 {
@@ -293,15 +294,16 @@ static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 	int ret = mvod_klt_cv_fast(k->cv, grey, k->p.fast_threshold, k->fast_xy, &nf);
 	if (ret)
 		return ret;
+	mark_tracks(k);
 	int nc = 0;
 	for (int i = 0; i < nf; i++) {
 		float x = k->fast_xy[2 * i], y = k->fast_xy[2 * i + 1];
-		float s = inside(k, x, y) ? harris(grey, (int)x, (int)y) : 0;
+		float s = inside(k, x, y) && !k->occ[occ_index(k, x, y)] ? harris(grey, (int)x, (int)y)
+									 : 0;
 		if (s > 0) /* not an edge or a flat patch */
 			k->corners[nc++] = (struct corner){x, y, s};
 	}
 	sort_by_score(k->corners, nc);
-	mark_tracks(k);
 	int cells = BUCKETS_X * BUCKETS_Y;
 	add_corners(k, nc, (k->p.max_tracks + cells - 1) / cells);
 	add_corners(k, nc, 0);
