@@ -130,11 +130,12 @@ double mvod_motion_rotation_residual(const double R[9], const double x1[2], cons
 static bool rotation_inlier(const double R[9], const double x1[2], const double x2[2],
 			    double thresh2)
 {
-	double r[3] = {x1[0], x1[1], 1.0}, p[3];
-	mvod_mat3_vec(R, r, p);
-	if (p[2] <= 1e-9)
+	/* R (x1, 1) as mvod_mat3_vec sums it, inline: the same doubles, no call. */
+	double pz = R[6] * x1[0] + R[7] * x1[1] + R[8];
+	if (pz <= 1e-9)
 		return false;
-	double dx = p[0] / p[2] - x2[0], dy = p[1] / p[2] - x2[1];
+	double dx = (R[0] * x1[0] + R[1] * x1[1] + R[2]) / pz - x2[0];
+	double dy = (R[3] * x1[0] + R[4] * x1[1] + R[5]) / pz - x2[1];
 	return dx * dx + dy * dy < thresh2;
 }
 
