@@ -33,7 +33,7 @@
  * KITTI 06, 226.0e6 -> 120.6e6 instructions per frame (BENCHMARKS.md, "Initial flow for every
  * track"). The search alone (no refinement) at 9 px failed test_klt.c's turn on mvod-synth's
  * smooth texture, which the full window at full resolution keeps as precise as before; the
- * backward check is not refined (flow()).
+ * backward check is not refined (forward_back()).
  */
 #define SEARCH_WIN 9
 /* A bucket's median displacement predicts its new tracks when it holds this many measured. */
@@ -67,7 +67,11 @@ struct mvod_klt {
 	uint8_t *fresh; /* max_tracks: 1 = started on the last frame, no displacement measured */
 	uint8_t *cell;  /* max_tracks: bucket of pos (predict's scratch) */
 	float *next, *back; /* 2 * max_tracks: forward and backward LK results */
-	uint8_t *ok, *ok_back, *ok_fine;
+	uint8_t *ok, *ok_back, *sel; /* max_tracks; sel: which tracks a pass takes (flow_some) */
+	/* flow_some's compacted copies of the tracks a pass takes: 2 * max_tracks, max_tracks */
+	float *some_from, *some_to;
+	int *some_idx;
+	uint8_t *some_ok;
 	int fast_cap;
 	float *fast_xy;      /* 2 * fast_cap */
 	struct corner *corners; /* fast_cap (>= max_tracks: predict's scratch too) */
@@ -96,13 +100,17 @@ static int alloc_arrays(struct mvod_klt *k)
 	k->back = calloc(2 * n, sizeof(float));
 	k->ok = calloc(n, 1);
 	k->ok_back = calloc(n, 1);
-	k->ok_fine = calloc(n, 1);
+	k->sel = calloc(n, 1);
+	k->some_from = calloc(2 * n, sizeof(float));
+	k->some_to = calloc(2 * n, sizeof(float));
+	k->some_idx = calloc(n, sizeof(int));
+	k->some_ok = calloc(n, 1);
 	k->fast_xy = calloc(2 * (size_t)k->fast_cap, sizeof(float));
 	k->corners = calloc((size_t)k->fast_cap, sizeof(*k->corners));
 	k->occ = calloc((size_t)k->occ_w * (size_t)k->occ_h, 1);
 	return k->pos && k->vel && k->err && k->score && k->ref && k->fresh && k->cell && k->next &&
-			       k->back && k->ok && k->ok_back && k->ok_fine && k->fast_xy &&
-			       k->corners && k->occ
+			       k->back && k->ok && k->ok_back && k->sel && k->some_from && k->some_to &&
+			       k->some_idx && k->some_ok && k->fast_xy && k->corners && k->occ
 		       ? 0
 		       : -ENOMEM;
 }
@@ -152,7 +160,11 @@ void mvod_klt_destroy(struct mvod_klt *k)
 	free(k->back);
 	free(k->ok);
 	free(k->ok_back);
-	free(k->ok_fine);
+	free(k->sel);
+	free(k->some_from);
+	free(k->some_to);
+	free(k->some_idx);
+	free(k->some_ok);
 	free(k->fast_xy);
 	free(k->corners);
 	free(k->occ);
@@ -164,21 +176,27 @@ static bool inside(const struct mvod_klt *k, float x, float y)
 	return x >= BORDER && y >= BORDER && x <= k->w - 1 - BORDER && y <= k->h - 1 - BORDER;
 }
 
-/* Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. */
+/*
+ * Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. The
+ * sums are integers (each term at most 255^2, 49 of them under 2^24), so summing them as int
+ * gives the float sums exactly (the same scores) at 73 % of the instructions (callgrind, KITTI 06,
+ * 20 frames: 93.3e6 -> 68.2e6 in harris()).
+ */
 static float harris(const struct mvod_image *g, int x, int y)
 {
-	float a = 0, b = 0, c = 0;
+	int32_t a = 0, b = 0, c = 0;
 	for (int dy = -3; dy <= 3; dy++) {
 		const uint8_t *r = g->data + (size_t)(y + dy) * (size_t)g->stride + x;
 		for (int dx = -3; dx <= 3; dx++) {
-			float ix = (float)r[dx + 1] - r[dx - 1];
-			float iy = (float)r[dx + g->stride] - r[dx - g->stride];
+			int32_t ix = r[dx + 1] - r[dx - 1];
+			int32_t iy = r[dx + g->stride] - r[dx - g->stride];
 			a += ix * ix;
 			b += iy * iy;
 			c += ix * iy;
 		}
 	}
-	return a * b - c * c - 0.04f * (a + b) * (a + b);
+	float fa = (float)a, fb = (float)b, fc = (float)c;
+	return fa * fb - fc * fc - 0.04f * (fa + fb) * (fa + fb);
 }
 
 /*
@@ -267,7 +285,8 @@ static void add_corners(struct mvod_klt *k, int nc, int quota)
 /*
  * Tops the tracks up with FAST corners ranked by Harris score: first each grid bucket up to
  * its share of max_tracks, so that no part of the image is left without tracks, then the
- * strongest of the rest anywhere.
+ * strongest of the rest anywhere. A corner in a cell a track holds is never taken
+ * (add_corners), so it is neither scored nor sorted.
  */
 static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 {
@@ -275,15 +294,16 @@ static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 	int ret = mvod_klt_cv_fast(k->cv, grey, k->p.fast_threshold, k->fast_xy, &nf);
 	if (ret)
 		return ret;
+	mark_tracks(k);
 	int nc = 0;
 	for (int i = 0; i < nf; i++) {
 		float x = k->fast_xy[2 * i], y = k->fast_xy[2 * i + 1];
-		float s = inside(k, x, y) ? harris(grey, (int)x, (int)y) : 0;
+		float s = inside(k, x, y) && !k->occ[occ_index(k, x, y)] ? harris(grey, (int)x, (int)y)
+									 : 0;
 		if (s > 0) /* not an edge or a flat patch */
 			k->corners[nc++] = (struct corner){x, y, s};
 	}
 	sort_by_score(k->corners, nc);
-	mark_tracks(k);
 	int cells = BUCKETS_X * BUCKETS_Y;
 	add_corners(k, nc, (k->p.max_tracks + cells - 1) / cells);
 	add_corners(k, nc, 0);
@@ -338,39 +358,60 @@ static bool predict(struct mvod_klt *k)
 }
 
 /*
- * Lucas-Kanade of n points, from[] to to[] (which holds the guesses), into ok[]: with a
- * predicted flow a SEARCH_WIN search on the pyramid, then, forward only, WIN on level 0 from
- * its result; without, WIN on every level. The backward pass only checks the forward one
- * against fb_px: unrefined, KITTI 06 costs 101.6e6 instead of 120.6e6 instructions per frame,
- * err_avg 06 / 07 0.072 / 0.043 against 0.079 / 0.050 (BENCHMARKS.md).
+ * Lucas-Kanade of the points i < n with sel[i] set, from[i] to to[i] (which holds the guess),
+ * ok[i] saying which converged; ok[i] = 0 where sel[i] is not set, to[i] left as it was. LK
+ * treats every point on its own, so a point's result is the same whether or not the others
+ * are passed: a pass skips the tracks an earlier pass already dropped, at no change to any
+ * trajectory (BENCHMARKS.md, "Bit-identical cuts"). sel may be ok.
  */
-static int flow(struct mvod_klt *k, int backward, bool predicted, const float *from, float *to,
-		int n, uint8_t *ok)
+static int flow_some(struct mvod_klt *k, int backward, int win, int levels, const float *from,
+		     float *to, int n, const uint8_t *sel, uint8_t *ok)
 {
-	if (!predicted)
-		return mvod_klt_cv_flow(k->cv, backward, WIN, LEVELS, from, to, n, ok);
-	int ret = mvod_klt_cv_flow(k->cv, backward, SEARCH_WIN, LEVELS, from, to, n, ok);
-	if (ret || backward)
-		return ret;
-	ret = mvod_klt_cv_flow(k->cv, backward, WIN, 0, from, to, n, k->ok_fine);
-	for (int i = 0; i < n && !ret; i++)
-		ok[i] = ok[i] && k->ok_fine[i];
+	int m = 0;
+	for (int i = 0; i < n; i++) {
+		if (!sel[i]) {
+			ok[i] = 0;
+			continue;
+		}
+		k->some_idx[m] = i;
+		memcpy(k->some_from + 2 * m, from + 2 * i, 2 * sizeof(float));
+		memcpy(k->some_to + 2 * m, to + 2 * i, 2 * sizeof(float));
+		m++;
+	}
+	int ret = mvod_klt_cv_flow(k->cv, backward, win, levels, k->some_from, k->some_to, m,
+				   k->some_ok);
+	for (int j = 0; j < m && !ret; j++) {
+		int i = k->some_idx[j];
+		memcpy(to + 2 * i, k->some_to + 2 * j, 2 * sizeof(float));
+		ok[i] = k->some_ok[j];
+	}
 	return ret;
 }
 
 /*
  * Every track forward from pos with vel (its displacement) as the initial flow into next, then
- * back into back with vel undone as the guess; ok and ok_back say which converged.
+ * back into back with vel undone as the guess; ok and ok_back say which converged. With a
+ * predicted flow a SEARCH_WIN search on the pyramid, then, forward only, WIN on level 0 from
+ * its result; without, WIN on every level. The backward pass only checks the forward one
+ * against fb_px: unrefined, KITTI 06 costs 101.6e6 instead of 120.6e6 instructions per frame,
+ * err_avg 06 / 07 0.072 / 0.043 against 0.079 / 0.050 (BENCHMARKS.md). The refinement takes
+ * the tracks the search kept, the backward pass those still kept and inside the image
+ * (kept() drops the others whatever their backward result).
  */
 static int forward_back(struct mvod_klt *k, bool predicted)
 {
-	int n = k->n;
+	int n = k->n, win = predicted ? SEARCH_WIN : WIN;
 	for (int i = 0; i < 2 * n; i++)
 		k->next[i] = k->pos[i] + k->vel[i];
-	int ret = flow(k, 0, predicted, k->pos, k->next, n, k->ok);
-	for (int i = 0; i < 2 * n && !ret; i++)
-		k->back[i] = k->next[i] - k->vel[i];
-	return ret ? ret : flow(k, 1, predicted, k->next, k->back, n, k->ok_back);
+	int ret = mvod_klt_cv_flow(k->cv, 0, win, LEVELS, k->pos, k->next, n, k->ok);
+	if (!ret && predicted)
+		ret = flow_some(k, 0, WIN, 0, k->pos, k->next, n, k->ok, k->ok);
+	for (int i = 0; i < n; i++) {
+		k->back[2 * i] = k->next[2 * i] - k->vel[2 * i];
+		k->back[2 * i + 1] = k->next[2 * i + 1] - k->vel[2 * i + 1];
+		k->sel[i] = k->ok[i] && inside(k, k->next[2 * i], k->next[2 * i + 1]);
+	}
+	return ret ? ret : flow_some(k, 1, win, LEVELS, k->next, k->back, n, k->sel, k->ok_back);
 }
 
 /* Track i survives: both ways converged, it came back within fb_px (*fb) and is inside. */

@@ -120,12 +120,39 @@ double mvod_motion_rotation_residual(const double R[9], const double x1[2], cons
 	return hypot(p[0] / p[2] - x2[0], p[1] / p[2] - x2[1]);
 }
 
+/*
+ * Whether R explains x1 -> x2 within thresh (normalised units; thresh2 its square): the
+ * squared distance against thresh2 instead of mvod_motion_rotation_residual's hypot against
+ * thresh: the same decision but for a distance within rounding of thresh (KITTI 06/07
+ * trajectories identical), and with rotation_inliers' early stop the rotation RANSAC costs
+ * 26.7e6 instead of 43.6e6 instructions over 20 KITTI 06 frames (callgrind).
+ */
+static bool rotation_inlier(const double R[9], const double x1[2], const double x2[2],
+			    double thresh2)
+{
+	/* R (x1, 1) as mvod_mat3_vec sums it, inline: the same doubles, no call. */
+	double pz = R[6] * x1[0] + R[7] * x1[1] + R[8];
+	if (pz <= 1e-9)
+		return false;
+	double dx = (R[0] * x1[0] + R[1] * x1[1] + R[2]) / pz - x2[0];
+	double dy = (R[3] * x1[0] + R[4] * x1[1] + R[5]) / pz - x2[1];
+	return dx * dx + dy * dy < thresh2;
+}
+
+/*
+ * Inliers of R among the n matches, into mask when not NULL. Without a mask the count stops
+ * as soon as it cannot exceed beat (the RANSAC's best so far, which only a larger count
+ * replaces) and is then at most beat.
+ */
 static int rotation_inliers(const double *x1, const double *x2, int n, const double R[9],
-			    double thresh, uint8_t *mask)
+			    double thresh, uint8_t *mask, int beat)
 {
 	int count = 0;
+	double thresh2 = thresh * thresh;
 	for (int i = 0; i < n; i++) {
-		uint8_t in = mvod_motion_rotation_residual(R, x1 + 2 * i, x2 + 2 * i) < thresh;
+		if (!mask && count + (n - i) <= beat)
+			return count;
+		uint8_t in = rotation_inlier(R, x1 + 2 * i, x2 + 2 * i, thresh2);
 		if (mask)
 			mask[i] = in;
 		count += in;
@@ -153,16 +180,16 @@ int mvod_motion_rotation_ransac(const double *x1, const double *x2, int n, doubl
 		double Rs[9];
 		if (mvod_motion_rotation_only(a, b, both, 2, Rs) != 0)
 			continue;
-		int c = rotation_inliers(x1, x2, n, Rs, thresh, NULL);
+		int c = rotation_inliers(x1, x2, n, Rs, thresh, NULL, best);
 		if (c > best) {
 			best = c;
 			memcpy(R, Rs, sizeof(Rs));
 		}
 	}
 	for (int pass = 0; best >= 2 && pass < 2; pass++) {
-		rotation_inliers(x1, x2, n, R, thresh, mask);
+		rotation_inliers(x1, x2, n, R, thresh, mask, 0);
 		if (mvod_motion_rotation_only(x1, x2, mask, n, R) != 0)
 			break;
 	}
-	return best >= 2 ? rotation_inliers(x1, x2, n, R, thresh, mask) : 0;
+	return best >= 2 ? rotation_inliers(x1, x2, n, R, thresh, mask, 0) : 0;
 }
