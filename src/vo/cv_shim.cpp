@@ -127,9 +127,12 @@ extern "C" void mvod_cv_preproc_destroy(struct mvod_cv_preproc *p)
 
 struct mvod_cv_detector {
 	cv::Ptr<cv::Feature2D> f2d;
-	int desc_bytes;
+	int desc_bytes, max_features;
 	std::vector<cv::KeyPoint> kps;
 	cv::Mat desc;
+	cv::Ptr<cv::ORB> orb, band;   /* ORB only: f2d as ORB, and the road band's own detector */
+	cv::Mat mask;                 /* width x height, 255 off the band (mvod_cv_detect_band) */
+	cv::Mat band_mask;            /* its complement */
 };
 
 extern "C" int mvod_cv_desc_bytes(enum mvod_detector kind)
@@ -144,11 +147,17 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 		return -EINVAL;
 	return mvod_guarded([&] {
 		auto d = std::make_unique<mvod_cv_detector>();
-		if (kind == MVOD_DETECTOR_SIFT)
+		if (kind == MVOD_DETECTOR_SIFT) {
 			d->f2d = cv::SIFT::create(max_features);
-		else
-			d->f2d = cv::ORB::create(max_features);
+		} else {
+			d->orb = cv::ORB::create(max_features);
+			d->band = cv::ORB::create(max_features);
+			d->f2d = d->orb;
+			d->mask.create(height, width, CV_8U);
+			d->band_mask.create(height, width, CV_8U);
+		}
 		d->desc_bytes = mvod_cv_desc_bytes(kind);
+		d->max_features = max_features;
 		d->kps.reserve((size_t)max_features * 2);
 		/*
 		 * Shaped as the detector returns a frame with max_features features (SIFT: rows of
@@ -162,23 +171,62 @@ extern "C" int mvod_cv_detector_create(enum mvod_detector kind, int max_features
 	});
 }
 
+/* d->kps and d->desc appended to out, up to its cap. */
+static void append(const struct mvod_cv_detector *d, struct mvod_features *out)
+{
+	int n = std::min((int)d->kps.size(), out->cap - out->n);
+	for (int i = 0; i < n; i++) {
+		struct mvod_keypoint *k = &out->kp[out->n + i];
+		k->x = d->kps[(size_t)i].pt.x;
+		k->y = d->kps[(size_t)i].pt.y;
+		k->octave = d->kps[(size_t)i].octave;
+		k->response = d->kps[(size_t)i].response;
+		memcpy(out->desc + (size_t)(out->n + i) * d->desc_bytes, d->desc.ptr(i),
+		       (size_t)d->desc_bytes);
+	}
+	out->n += n;
+}
+
 extern "C" int mvod_cv_detect(struct mvod_cv_detector *d, const struct mvod_image *grey,
 			      struct mvod_features *out)
 {
 	if (grey->fmt != MVOD_PIX_GREY || out->desc_bytes != d->desc_bytes)
 		return -EINVAL;
 	return mvod_guarded([&] {
+		if (d->orb)
+			d->orb->setMaxFeatures(d->max_features);
 		d->f2d->detectAndCompute(view(grey), cv::noArray(), d->kps, d->desc);
-		int n = std::min((int)d->kps.size(), out->cap);
-		for (int i = 0; i < n; i++) {
-			out->kp[i].x = d->kps[(size_t)i].pt.x;
-			out->kp[i].y = d->kps[(size_t)i].pt.y;
-			out->kp[i].octave = d->kps[(size_t)i].octave;
-			out->kp[i].response = d->kps[(size_t)i].response;
-			memcpy(out->desc + (size_t)i * d->desc_bytes, d->desc.ptr(i),
-			       (size_t)d->desc_bytes);
-		}
-		out->n = n;
+		out->n = 0;
+		append(d, out);
+		return 0;
+	});
+}
+
+extern "C" int mvod_cv_detect_band(struct mvod_cv_detector *d, const struct mvod_image *grey,
+				   const float quad[8], int band_features, int fast_threshold,
+				   struct mvod_features *out)
+{
+	if (!d->orb)
+		return mvod_cv_detect(d, grey, out);
+	if (grey->fmt != MVOD_PIX_GREY || out->desc_bytes != d->desc_bytes ||
+	    grey->w != d->mask.cols || grey->h != d->mask.rows || band_features < 1 ||
+	    band_features >= d->max_features)
+		return -EINVAL;
+	return mvod_guarded([&] {
+		cv::Point poly[4];
+		for (int i = 0; i < 4; i++)
+			poly[i] = cv::Point(cvRound(quad[2 * i]), cvRound(quad[2 * i + 1]));
+		d->band_mask.setTo(0);
+		cv::fillConvexPoly(d->band_mask, poly, 4, cv::Scalar(255));
+		cv::bitwise_not(d->band_mask, d->mask);
+		d->orb->setMaxFeatures(d->max_features - band_features);
+		d->orb->detectAndCompute(view(grey), d->mask, d->kps, d->desc);
+		out->n = 0;
+		append(d, out);
+		d->band->setMaxFeatures(band_features);
+		d->band->setFastThreshold(fast_threshold);
+		d->band->detectAndCompute(view(grey), d->band_mask, d->kps, d->desc);
+		append(d, out);
 		return 0;
 	});
 }

@@ -39,6 +39,14 @@ int mvod_cv_detector_create(enum mvod_detector kind, int max_features, int width
 /* Detects up to out->cap keypoints with descriptors (out->desc_bytes must match the detector). */
 int mvod_cv_detect(struct mvod_cv_detector *d, const struct mvod_image *grey,
 		   struct mvod_features *out);
+/*
+ * As mvod_cv_detect, but band_features of them (ORB) come from inside the image quadrilateral
+ * quad (x, y four times, convex) with FAST's contrast threshold fast_threshold, and the rest
+ * from outside it. SIFT detectors ignore the band (mvod_cv_detect).
+ */
+int mvod_cv_detect_band(struct mvod_cv_detector *d, const struct mvod_image *grey,
+			const float quad[8], int band_features, int fast_threshold,
+			struct mvod_features *out);
 void mvod_cv_detector_destroy(struct mvod_cv_detector *d);
 
 /*
