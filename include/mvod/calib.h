@@ -32,7 +32,8 @@ struct mvod_camera {
 	bool has_focus;
 	double focus;
 	/*
-	 * How the camera is mounted above the ground ("mount" in mvod JSON), when known:
+	 * How the camera is mounted above the ground ("mount" in mvod JSON, mount_height_m,
+	 * mount_pitch_deg and mount_roll_deg in OpenCV and ROS YAML/XML), when known:
 	 * --scale height takes its height (metres) when --camera-height is not given, and its
 	 * pitch (degrees, positive looking down) and roll (degrees, positive: the ground's normal
 	 * leans towards +x) as the ground normal's first estimate.
@@ -132,14 +133,28 @@ int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *
  * distortion_coefficients (or D1). The model is pinhole-radtan unless distortion_model says
  * equidistant, fisheye or fisheye-kb4; OpenCV's own files cannot say, so 4 coefficients are
  * k1 k2 p1 p2 there. image_width and image_height are optional (0 when absent). fmt (may be
- * NULL) says whether the text was OpenCV's (with its header, or XML) or ROS's.
+ * NULL) says whether the text was OpenCV's (with its header, or XML) or ROS's. The mount is
+ * read from the optional top-level scalars mount_height_m (required with the others),
+ * mount_pitch_deg and mount_roll_deg (0 when absent), with mvod JSON's bounds.
  */
 int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam,
 				 enum mvod_calib_format *fmt, char *err, size_t errlen);
 
 /*
+ * The OpenCV or ROS YAML camera file text with its mount set to mount (height_m, pitch_deg,
+ * roll_deg) as the scalars mount_height_m, mount_pitch_deg and mount_roll_deg: a value there
+ * is replaced in its place, the missing keys are added where the top-level map ends; every
+ * other byte is kept. The result is read back and must give the same camera with this mount.
+ * XML is refused (-ENOTSUP), as is YAML whose top level is no block map. *out: malloc'd, for
+ * free. Returns 0 or -errno with a one-line reason in err.
+ */
+int mvod_calib_filestorage_set_mount(const char *text, const double mount[3], char **out, char *err,
+				     size_t errlen);
+
+/*
  * Writers, each through a temporary file and rename(). OpenCV: YAML, or XML when path ends in
  * ".xml"; a fisheye camera gets "distortion_model: fisheye" so that mvod reads it back as one.
+ * OpenCV and ROS carry the mount as above; KITTI has no place for it.
  * ROS: camera_info YAML (plumb_bob, rational_polynomial or equidistant; needs the image size).
  * KITTI: P0..P3 all [K | 0]; refuses a camera with distortion, since calib.txt cannot carry it.
  */

@@ -115,11 +115,12 @@ int mvod_mount_combine(struct mvod_mount_view *v, int n, struct mvod_mount *m,
 		       struct mvod_mount *sd);
 
 /*
- * Writes m as the "mount" block of the mvod JSON text (the camera file's content, as read) to
- * path, every other field kept as it was (a "mount" already there is replaced in its place),
- * values rounded to 0.1 mm and 0.01 deg, through mvod_write_replace (whole or not at all).
- * A text that is not mvod JSON (mvod-calibration/1) is refused: -EINVAL. Returns 0 or -errno
- * with a one-line reason in err.
+ * Writes m into the camera file's text (its content, as read) to path, values rounded to
+ * 0.1 mm and 0.01 deg, through mvod_write_replace (whole or not at all). mvod JSON: as its
+ * "mount" block, every other field kept as it was (a "mount" already there is replaced in its
+ * place); other JSON is refused (-EINVAL). Text that is no JSON: as OpenCV or ROS YAML, with
+ * mvod_calib_filestorage_set_mount (every other byte kept; XML refused, -ENOTSUP). Returns 0
+ * or -errno with a one-line reason in err.
  */
 int mvod_mount_write(const char *path, const char *text, const struct mvod_mount *m, char *err,
 		     size_t errlen);

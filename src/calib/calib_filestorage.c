@@ -230,6 +230,51 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 	return 0;
 }
 
+/*
+ * The mount, as three top-level scalars rather than a "mount" map: OpenCV writes and reads
+ * flat keys like image_width the same way in YAML and XML, and mvod mount replaces a scalar's
+ * text in place, keeping every other byte of the file (see mvod_calib_filestorage_set_mount).
+ */
+static const char *const mount_keys[3] = {"mount_height_m", "mount_pitch_deg", "mount_roll_deg"};
+
+static bool read_double(struct fs_node n, double *out)
+{
+	bool plain = false;
+	char *s = scalar(n, &plain), *end = s;
+	double v = s && plain ? strtod(s, &end) : 0;
+	bool ok = s && end != s && all_space(end) && isfinite(v);
+	xmlFree(s);
+	if (ok)
+		*out = v;
+	return ok;
+}
+
+/* Optional; the same bounds as mvod JSON's "mount" block. Pitch and roll default to 0. */
+static int read_mount(struct fs_node root, struct mvod_camera *c, char *err, size_t errlen)
+{
+	double v[3] = {0, 0, 0};
+	bool any = false, ok = true;
+	for (int i = 0; i < 3; i++) {
+		struct fs_node n = child(root, mount_keys[i]);
+		any = any || present(n);
+		ok = ok && (!present(n) || read_double(n, &v[i]));
+	}
+	if (!any)
+		return 0;
+	if (!ok || !present(child(root, mount_keys[0])) || !(v[0] > 0) || !(v[0] <= MVOD_MOUNT_MAX_HEIGHT_M) ||
+	    !(fabs(v[1]) <= MVOD_MOUNT_MAX_ANGLE_DEG) || !(fabs(v[2]) <= MVOD_MOUNT_MAX_ANGLE_DEG))
+		return mvod_errf(err, errlen, -EINVAL,
+				 "the mount must be \"mount_height_m\": metres above the ground, in (0, %g], "
+				 "\"mount_pitch_deg\": degrees down, \"mount_roll_deg\": degrees, each within "
+				 "+-%g: correct them or remove them",
+				 MVOD_MOUNT_MAX_HEIGHT_M, MVOD_MOUNT_MAX_ANGLE_DEG);
+	c->has_mount = true;
+	c->mount_height_m = v[0];
+	c->mount_pitch_deg = v[1];
+	c->mount_roll_deg = v[2];
+	return 0;
+}
+
 static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, size_t errlen)
 {
 	/* OpenCV's stereo_calib sample writes M1 D1 M2 D2: the first camera is the one wanted. */
@@ -259,7 +304,7 @@ static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, si
 				 dkey, mvod_calib_dist_counts(c->model), mvod_cam_model_name(c->model), rows, cols);
 	c->n_dist = (int)m.count;
 	memcpy(c->dist, m.v, sizeof(double) * m.count);
-	return 0;
+	return read_mount(root, c, err, errlen);
 }
 
 static int yaml_error(const yaml_parser_t *p, char *err, size_t errlen)
@@ -361,5 +406,152 @@ int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam, enum
 	*cam = c;
 	if (fmt)
 		*fmt = xml || opencv_yaml ? MVOD_CALIB_FMT_OPENCV : MVOD_CALIB_FMT_ROS;
+	return 0;
+}
+
+/* A replacement of text[at, end) by s (an insertion when at == end). */
+struct fs_edit {
+	size_t at, end;
+	char s[256];
+};
+
+/*
+ * libyaml's marks count characters (a CRLF two), not bytes: the byte offset of character i
+ * of the UTF-8 text, after the byte-order mark that libyaml skips uncounted.
+ */
+static size_t byte_at(const char *text, size_t i)
+{
+	size_t b = strncmp(text, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0;
+	for (; text[b] && i > 0; i--)
+		do
+			b++;
+		while (((unsigned char)text[b] & 0xC0) == 0x80);
+	return b;
+}
+
+/* The shortest decimal that reads back as v, appended to s (of size n). */
+static void add_number(char *s, size_t n, double v)
+{
+	char buf[32];
+	for (int digits = 15; digits <= 17; digits++) {
+		snprintf(buf, sizeof(buf), "%.*g", digits, v);
+		if (strtod(buf, NULL) == v)
+			break;
+	}
+	strncat(s, buf, n - strlen(s) - 1);
+}
+
+/*
+ * The edits that set the mount in the YAML document: a key already there has its value's
+ * text replaced; the others are added, one line each at the first key's indentation, where
+ * the top-level map ends (after its last entry and any comment after it). At most 4 edits.
+ */
+static int mount_edits(const char *text, yaml_document_t *doc, const double mount[3], struct fs_edit *e,
+		       int *n, char *err, size_t errlen)
+{
+	yaml_node_t *root = yaml_document_get_root_node(doc);
+	if (!root || root->type != YAML_MAPPING_NODE || root->data.mapping.style != YAML_BLOCK_MAPPING_STYLE ||
+	    root->data.mapping.pairs.start == root->data.mapping.pairs.top)
+		return mvod_errf(err, errlen, -ENOTSUP, "the camera file's YAML is not a block map of "
+				 "keys (one per line), the layout the mount can be added to");
+	const yaml_node_t *first = yaml_document_get_node(doc, root->data.mapping.pairs.start->key);
+	struct fs_node r = {.doc = doc, .y = root};
+	struct fs_edit *add = &e[0];
+	size_t end = byte_at(text, root->end_mark.index);
+	*add = (struct fs_edit){.at = end, .end = end};
+	if (end > 0 && text[end - 1] != '\n')
+		strcat(add->s, "\n");
+	*n = 1;
+	for (int i = 0; i < 3; i++) {
+		struct fs_node v = child(r, mount_keys[i]);
+		if (v.y && v.y->type != YAML_SCALAR_NODE)
+			return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be a number", mount_keys[i]);
+		if (v.y) {
+			e[*n] = (struct fs_edit){.at = byte_at(text, v.y->start_mark.index),
+						 .end = byte_at(text, v.y->end_mark.index)};
+			add_number(e[(*n)++].s, sizeof(e->s), mount[i]);
+			continue;
+		}
+		size_t len = strlen(add->s);
+		snprintf(add->s + len, sizeof(add->s) - len, "%*s%s: ", (int)first->start_mark.column, "",
+			 mount_keys[i]);
+		add_number(add->s, sizeof(add->s), mount[i]);
+		strncat(add->s, "\n", sizeof(add->s) - strlen(add->s) - 1);
+	}
+	if (add->s[0] == '\n' && add->s[1] == '\0')
+		add->s[0] = '\0';
+	return 0;
+}
+
+/* text with the edits applied, in the order of their place; malloc'd into *out. */
+static int apply_edits(const char *text, struct fs_edit *e, int n, char **out)
+{
+	for (int i = 1; i < n; i++)
+		for (int j = i; j > 0 && e[j].at < e[j - 1].at; j--) {
+			struct fs_edit t = e[j];
+			e[j] = e[j - 1];
+			e[j - 1] = t;
+		}
+	size_t len = strlen(text) + 1;
+	for (int i = 0; i < n; i++)
+		len += strlen(e[i].s);
+	char *s = malloc(len);
+	if (!s)
+		return -ENOMEM;
+	size_t from = 0, to = 0;
+	for (int i = 0; i < n; i++) {
+		memcpy(s + to, text + from, e[i].at - from);
+		to += e[i].at - from;
+		memcpy(s + to, e[i].s, strlen(e[i].s));
+		to += strlen(e[i].s);
+		from = e[i].end;
+	}
+	strcpy(s + to, text + from);
+	*out = s;
+	return 0;
+}
+
+/* Whether b is a with the mount m, as read back. */
+static bool same_but_mount(const struct mvod_camera *a, const struct mvod_camera *b, const double m[3])
+{
+	return a->model == b->model && a->width == b->width && a->height == b->height && a->fx == b->fx &&
+	       a->fy == b->fy && a->cx == b->cx && a->cy == b->cy && a->n_dist == b->n_dist &&
+	       memcmp(a->dist, b->dist, sizeof(double) * (size_t)a->n_dist) == 0 && b->has_mount &&
+	       b->mount_height_m == m[0] && b->mount_pitch_deg == m[1] && b->mount_roll_deg == m[2];
+}
+
+int mvod_calib_filestorage_set_mount(const char *text, const double mount[3], char **out, char *err,
+				     size_t errlen)
+{
+	const char *p = text + strspn(text, " \t\r\n");
+	if (*p == '<')
+		return mvod_errf(err, errlen, -ENOTSUP, "an OpenCV XML camera file cannot be given a mount "
+				 "in place (libxml2 does not keep an XML file's layout byte for byte): "
+				 "convert it to YAML or mvod JSON with mvod calib-convert");
+	struct mvod_camera before, after;
+	int ret = mvod_calib_parse_filestorage(text, &before, NULL, err, errlen);
+	if (ret)
+		return ret;
+	yaml_document_t doc;
+	size_t header_at = strncmp(p, "%YAML:", 6) == 0 ? (size_t)(p - text) : SIZE_MAX;
+	if ((ret = load_yaml(text, header_at, &doc, err, errlen)))
+		return ret;
+	struct fs_edit e[4];
+	int n = 0;
+	ret = mount_edits(text, &doc, mount, e, &n, err, errlen);
+	yaml_document_delete(&doc);
+	if (!ret && (ret = apply_edits(text, e, n, out)))
+		return mvod_errf(err, errlen, ret, "out of memory");
+	if (ret)
+		return ret;
+	/* The edit is checked by reading it back: a file is never written that would not read. */
+	char why[256];
+	if (mvod_calib_parse_filestorage(*out, &after, NULL, why, sizeof(why)) ||
+	    !same_but_mount(&before, &after, mount)) {
+		free(*out);
+		*out = NULL;
+		return mvod_errf(err, errlen, -EINVAL, "the camera file with the mount set would not read "
+				 "back as the same camera: nothing written");
+	}
 	return 0;
 }

@@ -41,6 +41,12 @@ extern "C" int mvod_calib_save_opencv(const char *path, const struct mvod_camera
 			     cam->n_dist ? cam->dist : zero);
 		if (cam->model == MVOD_CAM_FISHEYE_KB4)
 			fs << "distortion_model" << "fisheye";
+		/* Flat scalars, as calib_filestorage.c reads them and mvod mount writes them. */
+		if (cam->has_mount) {
+			fs << "mount_height_m" << cam->mount_height_m;
+			fs << "mount_pitch_deg" << cam->mount_pitch_deg;
+			fs << "mount_roll_deg" << cam->mount_roll_deg;
+		}
 		text = fs.releaseAndGetString();
 		return 0;
 	});

@@ -306,17 +306,36 @@ static int set_mount(cJSON *root, const struct mvod_mount *m)
 	return ok ? 0 : -ENOMEM;
 }
 
+/* An OpenCV or ROS YAML camera file: its mount scalars set, every other byte kept. */
+static int write_filestorage(const char *path, const char *text, const struct mvod_mount *m,
+			     char *err, size_t errlen)
+{
+	const double mount[3] = {rounded(m->height_m, 4), rounded(m->pitch_deg, 2),
+				 rounded(m->roll_deg, 2)};
+	char *out = NULL, why[512];
+	int ret = mvod_calib_filestorage_set_mount(text, mount, &out, why, sizeof(why));
+	if (ret)
+		return mvod_errf(err, errlen, ret, "%s: %s", path, why);
+	ret = mvod_write_replace(path, out, strlen(out));
+	free(out);
+	if (ret)
+		mvod_errf(err, errlen, ret, "cannot write %s: %s", path, strerror(-ret));
+	return ret;
+}
+
 int mvod_mount_write(const char *path, const char *text, const struct mvod_mount *m, char *err,
 		     size_t errlen)
 {
+	if (text[strspn(text, " \t\r\n")] != '{')
+		return write_filestorage(path, text, m, err, errlen);
 	cJSON *root = cJSON_Parse(text);
 	const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
 	char *out = NULL;
 	int ret = 0;
 	if (!cJSON_IsObject(root) || !cJSON_IsString(fmt) ||
 	    strcmp(fmt->valuestring, MVOD_CALIB_FORMAT) != 0) {
-		ret = mvod_errf(err, errlen, -EINVAL, "%s is not mvod JSON (%s), the only camera file "
-				"that carries a mount: convert it with mvod calib-convert %s calib.json",
+		ret = mvod_errf(err, errlen, -EINVAL, "%s is not mvod JSON (%s), the only JSON camera "
+				"file that carries a mount: convert it with mvod calib-convert %s calib.json",
 				path, MVOD_CALIB_FORMAT, path);
 		goto out;
 	}

@@ -158,7 +158,11 @@ static int save(const struct convert *c, const struct mvod_camera *cam, char *er
 	switch (c->to) {
 	case MVOD_CALIB_FMT_OPENCV: return mvod_calib_save_opencv(c->out, cam, err, errlen);
 	case MVOD_CALIB_FMT_ROS: return mvod_calib_save_ros(c->out, cam, err, errlen);
-	case MVOD_CALIB_FMT_KITTI: return mvod_calib_save_kitti(c->out, cam, err, errlen);
+	case MVOD_CALIB_FMT_KITTI:
+		if (cam->has_mount)
+			fprintf(stderr, "%s: note: KITTI calib.txt has no place for the mount: it is "
+				"not carried into %s\n", cli_prog, c->out);
+		return mvod_calib_save_kitti(c->out, cam, err, errlen);
 	default: break;
 	}
 	struct mvod_calib_meta meta = {.rms_px = -1};

@@ -26,7 +26,7 @@ static void usage(FILE *out)
 "the board's pose in every frame under the camera file's intrinsics, refuses views whose\n"
 "pose is poor (corners off by over %g px, a board too small or too far for a pose within\n"
 "%g %% of the height and %g deg, a board not flat, a view far from the others), averages\n"
-"the rest, and writes the result into the camera file as its \"mount\" block, which\n"
+"the rest, and writes the result into the camera file as its mount, which\n"
 "mvod --scale height then uses when --camera-height is not given.\n"
 "\n"
 "  --source URI          the board on the floor, the camera still on its mount (required):\n"
@@ -37,8 +37,10 @@ static void usage(FILE *out)
 "                          charuco:COLSxROWS:SQUARE_M:MARKER_M:DICT  (COLSxROWS squares)\n"
 "                          chessboard:COLSxROWS:SQUARE_M             (inner corners)\n"
 "  --calib FILE          the camera file (required): its intrinsics are used, and its\n"
-"                        mount is written into it (mvod JSON only: convert other formats\n"
-"                        with mvod calib-convert); replaced whole, every other field kept\n"
+"                        mount is written into it: mvod JSON (its \"mount\" block) or\n"
+"                        OpenCV/ROS YAML (mount_height_m, mount_pitch_deg, mount_roll_deg,\n"
+"                        every other byte kept); not XML or KITTI calib.txt (convert them\n"
+"                        with mvod calib-convert); replaced whole by temp+rename\n"
 "  --board-thickness M   height of the board's printed face above the floor, metres\n"
 "                        (0..0.1, default 0): added to the height\n"
 "  --max-frames N        read at most N frames (default: the whole source)\n"
@@ -120,6 +122,22 @@ static int parse_cli(int argc, char **argv, struct cli *c)
 }
 
 /*
+ * Whether a YAML camera file can take the mount (XML and flow-style YAML cannot), tried on a
+ * placeholder mount before any frame is read rather than after the measurement.
+ */
+static int check_editable(const char *path, const char *text, char *err, size_t errlen)
+{
+	const double placeholder[3] = {1, 0, 0};
+	char *out = NULL, why[512];
+	int ret = mvod_calib_filestorage_set_mount(text, placeholder, &out, why, sizeof(why));
+	free(out);
+	if (ret)
+		mvod_errf(err, errlen, ret, "--calib %s: %s (or pass --dry-run to measure without "
+			  "writing)", path, why);
+	return ret;
+}
+
+/*
  * The camera file: its intrinsics and, unless --dry-run, its text, once it is known to be
  * mvod JSON that can be rewritten. Checked before any frame is read.
  */
@@ -137,8 +155,8 @@ static int open_camera(const struct cli *c, struct mvod_camera *cam, char **text
 	}
 	if (c->dry_run)
 		return 0;
-	if (fmt != MVOD_CALIB_FMT_MVOD) {
-		LOG(ERROR, "--calib %s is %s, which has no mount block: convert it with mvod "
+	if (fmt != MVOD_CALIB_FMT_MVOD && fmt != MVOD_CALIB_FMT_OPENCV && fmt != MVOD_CALIB_FMT_ROS) {
+		LOG(ERROR, "--calib %s is %s, which has no place for a mount: convert it with mvod "
 			   "calib-convert %s calib.json and pass --calib calib.json (or --dry-run "
 			   "to measure without writing)", c->calib, mvod_calib_format_title(fmt),
 		    c->calib);
@@ -152,6 +170,8 @@ static int open_camera(const struct cli *c, struct mvod_camera *cam, char **text
 	}
 	ret = mvod_read_file(c->calib, CAMERA_FILE_MAX_BYTES, "camera file", text, NULL, err,
 			     sizeof(err));
+	if (!ret && fmt != MVOD_CALIB_FMT_MVOD)
+		ret = check_editable(c->calib, *text, err, sizeof(err));
 	if (ret)
 		LOG(ERROR, "%s", err);
 	return ret;
