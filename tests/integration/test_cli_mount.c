@@ -139,6 +139,70 @@ static void measures(const char *uri, const char *board, double h, double pitch,
 	assert_true(fabs(cam.mount_roll_deg - roll) <= 0.15);
 }
 
+/* The camera file of uri converted by mvod calib-convert to tmp/name (OpenCV YAML or XML). */
+static const char *camera_converted(const char *uri, const char *name)
+{
+	const char *json = camera_copy(uri, "to-convert.json");
+	static char path[400];
+	snprintf(path, sizeof(path), "%s", harness_tmp_path(name));
+	char *argv[] = {(char *)harness_bin("MVOD"), "calib-convert", (char *)json, path, NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (r.status != 0)
+		fail_msg("calib-convert failed: %s", r.err);
+	return path;
+}
+
+/*
+ * Into an OpenCV YAML file: the mount added after the last key, every byte before it kept (a
+ * comment and a key mvod does not read among them), measured as well as into mvod JSON; run
+ * again, the values are replaced in place and nothing is added.
+ */
+static void test_measures_into_yaml(void **state)
+{
+	(void)state;
+	static char before[16384], after[16384], again[16384];
+	const char *calib = camera_converted(sheet, "sheet.yml");
+	harness_read_file(calib, before, sizeof(before));
+	strcat(before, "# kept as it is\navg_reprojection_error: 0.25\n");
+	harness_write_file(calib, before);
+	struct run_result r;
+	mount_run(&r, sheet, SHEET, calib, NULL);
+	if (r.status != 0)
+		fail_msg("mvod mount failed (%d): %s", r.status, r.err);
+	harness_read_file(calib, after, sizeof(after));
+	assert_memory_equal(after, before, strlen(before));
+	double h, pitch, roll;
+	char end;
+	assert_int_equal(sscanf(after + strlen(before), "mount_height_m: %lf\nmount_pitch_deg: %lf\n"
+				"mount_roll_deg: %lf%c", &h, &pitch, &roll, &end), 4);
+	struct mvod_camera cam;
+	char err[512];
+	assert_int_equal(mvod_calib_load(calib, &cam, err, sizeof(err)), 0);
+	/* The tolerances of measures(), for the same views. */
+	assert_true(cam.has_mount && cam.mount_height_m == h && cam.mount_pitch_deg == pitch);
+	assert_true(fabs(h - 0.5) <= 0.003 * 0.5 && fabs(pitch - 25) <= 0.15 && fabs(roll + 3) <= 0.15);
+	mount_run(&r, sheet, SHEET, calib, NULL);
+	assert_int_equal(r.status, 0);
+	harness_read_file(calib, again, sizeof(again));
+	assert_memory_equal(again, before, strlen(before));
+	assert_int_equal(sscanf(again + strlen(before), "mount_height_m: %lf\nmount_pitch_deg: %lf\n"
+				"mount_roll_deg: %lf%c", &h, &pitch, &roll, &end), 4);
+	int keys = 0;
+	for (const char *q = again; (q = strstr(q, "mount_")); q++)
+		keys++;
+	assert_int_equal(keys, 3);
+}
+
+/* OpenCV XML: refused before any frame is read, with the way out; the file untouched. */
+static void test_xml_refused(void **state)
+{
+	(void)state;
+	const char *calib = camera_converted(sheet, "sheet.xml");
+	refused(sheet, SHEET, calib, NULL, 1, "XML camera file cannot be given a mount");
+	refused(sheet, SHEET, calib, NULL, 1, "mvod calib-convert");
+}
+
 static void test_measures_mat(void **state)
 {
 	(void)state;
@@ -314,6 +378,8 @@ int main(void)
 		cmocka_unit_test(test_measures_mat),
 		cmocka_unit_test(test_measures_sheet),
 		cmocka_unit_test(test_measures_fisheye),
+		cmocka_unit_test(test_measures_into_yaml),
+		cmocka_unit_test(test_xml_refused),
 		cmocka_unit_test(test_scale_height_uses_mount),
 		cmocka_unit_test(test_no_board),
 		cmocka_unit_test(test_board_not_flat),

@@ -69,6 +69,41 @@ static void ros_mvod_opencv_ros(void **state)
 		assert_true(fabs(cam.dist[i] - k[i]) <= 2e-16 * fabs(k[i]));
 }
 
+/*
+ * The mount, every way: ROS YAML -> mvod JSON -> OpenCV YAML -> OpenCV XML -> ROS YAML, each
+ * read back with it; KITTI calib.txt has no place for it and says so.
+ */
+static void mount_carried(void **state)
+{
+	(void)state;
+	static const char *const names[] = {"m.json", "m.yml", "m.xml", "m-ros.yaml"};
+	char files[4][256], ros[256];
+	for (int i = 0; i < 4; i++)
+		snprintf(files[i], sizeof(files[i]), "%s/%s", harness_tmpdir(), names[i]);
+	snprintf(ros, sizeof(ros), "%s/m.yaml", harness_tmpdir());
+	harness_write_file(ros, ROS_YAML "mount_height_m: 1.65\nmount_pitch_deg: -2.25\n"
+					  "mount_roll_deg: 0.5\n");
+	const char *from = ros;
+	for (int i = 0; i < 4; i++) {
+		assert_int_equal(convert(from, files[i], i == 3 ? "--to" : NULL, i == 3 ? "ros" : NULL), 0);
+		struct mvod_camera cam;
+		char err[256];
+		assert_int_equal(mvod_calib_load(files[i], &cam, err, sizeof(err)), 0);
+		/* Exact: every writer prints a double that reads back as itself. */
+		if (!cam.has_mount || cam.mount_height_m != 1.65 || cam.mount_pitch_deg != -2.25 ||
+		    cam.mount_roll_deg != 0.5)
+			fail_msg("%s: no mount or not 1.65 m, -2.25 deg, 0.5 deg", files[i]);
+		from = files[i];
+	}
+	const char *kitti = path_in("m.txt");
+	harness_write_file(ros, "image_width: 752\nimage_height: 480\ncamera_matrix:\n  rows: 3\n"
+				"  cols: 3\n  data: [461.5, 0, 366.25, 0, 460.75, 248.125, 0, 0, 1]\n"
+				"distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n"
+				"mount_height_m: 1.65\n");
+	assert_int_equal(convert(ros, kitti, NULL, NULL), 0);
+	assert_non_null(strstr(r.err, "KITTI calib.txt has no place for the mount"));
+}
+
 /* A refused conversion names the reason and leaves an existing OUT untouched. */
 static void refusals_keep_out(void **state)
 {
@@ -104,6 +139,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(ros_mvod_opencv_ros),
+		cmocka_unit_test(mount_carried),
 		cmocka_unit_test(refusals_keep_out),
 		cmocka_unit_test(usage_errors),
 	};
