@@ -25,6 +25,8 @@ static void usage(FILE *out)
 "  ROS camera_info YAML  distortion_model plumb_bob, rational_polynomial or equidistant\n"
 "                        (fisheye)\n"
 "  KITTI calib.txt       fx, fy, cx, cy from P0 (no distortion, no image size)\n"
+"The camera's mount (mvod mount) is carried between mvod JSON (its \"mount\" block),\n"
+"OpenCV and ROS files (mount_height_m, mount_pitch_deg, mount_roll_deg); KITTI drops it.\n"
 "\n"
 "Options:\n"
 "  --to FORMAT           mvod (JSON), opencv (YAML, or XML when OUT ends in .xml), ros\n"
@@ -131,6 +133,9 @@ static void print_camera(const char *path, enum mvod_calib_format fmt, const str
 	for (int i = 0; i < cam->n_dist; i++)
 		printf("%s%.10g", i ? ", " : "", cam->dist[i]);
 	printf("]\n");
+	if (cam->has_mount)
+		printf("  mount: height %.10g m, pitch %.10g deg, roll %.10g deg\n", cam->mount_height_m,
+		       cam->mount_pitch_deg, cam->mount_roll_deg);
 }
 
 /* --size fills in a size IN lacks; it must not contradict one IN records. */
