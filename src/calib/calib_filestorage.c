@@ -261,12 +261,12 @@ static int read_mount(struct fs_node root, struct mvod_camera *c, char *err, siz
 	}
 	if (!any)
 		return 0;
-	if (!ok || !present(child(root, mount_keys[0])) || !(v[0] > 0) || !(v[0] <= MVOD_MOUNT_MAX_HEIGHT_M) ||
-	    !(fabs(v[1]) <= MVOD_MOUNT_MAX_ANGLE_DEG) || !(fabs(v[2]) <= MVOD_MOUNT_MAX_ANGLE_DEG))
+	if (!ok || !present(child(root, mount_keys[0])) || !(v[0] > 0) ||
+	    !(v[0] <= MVOD_MOUNT_MAX_HEIGHT_M) || !(fabs(v[1]) <= MVOD_MOUNT_MAX_ANGLE_DEG) || !(fabs(v[2]) <= MVOD_MOUNT_MAX_ANGLE_DEG))
 		return mvod_errf(err, errlen, -EINVAL,
-				 "the mount must be \"mount_height_m\": metres above the ground, in (0, %g], "
-				 "\"mount_pitch_deg\": degrees down, \"mount_roll_deg\": degrees, each within "
-				 "+-%g: correct them or remove them",
+				 "the mount must be \"mount_height_m\": metres above the ground, in "
+				 "(0, %g], \"mount_pitch_deg\": degrees down, \"mount_roll_deg\": "
+				 "degrees, each within +-%g: correct them or remove them",
 				 MVOD_MOUNT_MAX_HEIGHT_M, MVOD_MOUNT_MAX_ANGLE_DEG);
 	c->has_mount = true;
 	c->mount_height_m = v[0];
@@ -450,8 +450,8 @@ static int mount_edits(const char *text, yaml_document_t *doc, const double moun
 		       int *n, char *err, size_t errlen)
 {
 	yaml_node_t *root = yaml_document_get_root_node(doc);
-	if (!root || root->type != YAML_MAPPING_NODE || root->data.mapping.style != YAML_BLOCK_MAPPING_STYLE ||
-	    root->data.mapping.pairs.start == root->data.mapping.pairs.top)
+	if (!root || root->type != YAML_MAPPING_NODE ||
+	    root->data.mapping.style != YAML_BLOCK_MAPPING_STYLE || root->data.mapping.pairs.start == root->data.mapping.pairs.top)
 		return mvod_errf(err, errlen, -ENOTSUP, "the camera file's YAML is not a block map of "
 				 "keys (one per line), the layout the mount can be added to");
 	const yaml_node_t *first = yaml_document_get_node(doc, root->data.mapping.pairs.start->key);
