@@ -262,7 +262,8 @@ static int read_mount(struct fs_node root, struct mvod_camera *c, char *err, siz
 	if (!any)
 		return 0;
 	if (!ok || !present(child(root, mount_keys[0])) || !(v[0] > 0) ||
-	    !(v[0] <= MVOD_MOUNT_MAX_HEIGHT_M) || !(fabs(v[1]) <= MVOD_MOUNT_MAX_ANGLE_DEG) || !(fabs(v[2]) <= MVOD_MOUNT_MAX_ANGLE_DEG))
+	    !(v[0] <= MVOD_MOUNT_MAX_HEIGHT_M) || !(fabs(v[1]) <= MVOD_MOUNT_MAX_ANGLE_DEG) ||
+	    !(fabs(v[2]) <= MVOD_MOUNT_MAX_ANGLE_DEG))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "the mount must be \"mount_height_m\": metres above the ground, in "
 				 "(0, %g], \"mount_pitch_deg\": degrees down, \"mount_roll_deg\": "
@@ -446,12 +447,13 @@ static void add_number(char *s, size_t n, double v)
  * text replaced; the others are added, one line each at the first key's indentation, where
  * the top-level map ends (after its last entry and any comment after it). At most 4 edits.
  */
-static int mount_edits(const char *text, yaml_document_t *doc, const double mount[3], struct fs_edit *e,
-		       int *n, char *err, size_t errlen)
+static int mount_edits(const char *text, yaml_document_t *doc, const double mount[3],
+		       struct fs_edit *e, int *n, char *err, size_t errlen)
 {
 	yaml_node_t *root = yaml_document_get_root_node(doc);
 	if (!root || root->type != YAML_MAPPING_NODE ||
-	    root->data.mapping.style != YAML_BLOCK_MAPPING_STYLE || root->data.mapping.pairs.start == root->data.mapping.pairs.top)
+	    root->data.mapping.style != YAML_BLOCK_MAPPING_STYLE ||
+	    root->data.mapping.pairs.start == root->data.mapping.pairs.top)
 		return mvod_errf(err, errlen, -ENOTSUP, "the camera file's YAML is not a block map of "
 				 "keys (one per line), the layout the mount can be added to");
 	const yaml_node_t *first = yaml_document_get_node(doc, root->data.mapping.pairs.start->key);
@@ -512,7 +514,8 @@ static int apply_edits(const char *text, struct fs_edit *e, int n, char **out)
 }
 
 /* Whether b is a with the mount m, as read back. */
-static bool same_but_mount(const struct mvod_camera *a, const struct mvod_camera *b, const double m[3])
+static bool same_but_mount(const struct mvod_camera *a, const struct mvod_camera *b,
+			   const double m[3])
 {
 	return a->model == b->model && a->width == b->width && a->height == b->height && a->fx == b->fx &&
 	       a->fy == b->fy && a->cx == b->cx && a->cy == b->cy && a->n_dist == b->n_dist &&
