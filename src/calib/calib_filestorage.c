@@ -261,9 +261,7 @@ static int read_mount(struct fs_node root, struct mvod_camera *c, char *err, siz
 	}
 	if (!any)
 		return 0;
-	if (!ok || !present(child(root, mount_keys[0])) || !(v[0] > 0) ||
-	    !(v[0] <= MVOD_MOUNT_MAX_HEIGHT_M) || !(fabs(v[1]) <= MVOD_MOUNT_MAX_ANGLE_DEG) ||
-	    !(fabs(v[2]) <= MVOD_MOUNT_MAX_ANGLE_DEG))
+	if (!ok || !present(child(root, mount_keys[0])) || !mvod_calib_mount_ok(v[0], v[1], v[2]))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "the mount must be \"mount_height_m\": metres above the ground, in "
 				 "(0, %g], \"mount_pitch_deg\": degrees down, \"mount_roll_deg\": "

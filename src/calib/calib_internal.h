@@ -7,6 +7,14 @@
 
 #include "mvod/calib.h"
 
+/* A mount within every camera format's bounds: height in (0, MAX], pitch and roll within +-MAX. */
+static inline bool mvod_calib_mount_ok(double height_m, double pitch_deg, double roll_deg)
+{
+	return height_m > 0 && height_m <= MVOD_MOUNT_MAX_HEIGHT_M &&
+	       pitch_deg >= -MVOD_MOUNT_MAX_ANGLE_DEG && pitch_deg <= MVOD_MOUNT_MAX_ANGLE_DEG &&
+	       roll_deg >= -MVOD_MOUNT_MAX_ANGLE_DEG && roll_deg <= MVOD_MOUNT_MAX_ANGLE_DEG;
+}
+
 #ifdef __cplusplus
 extern "C" {
 #endif

@@ -131,11 +131,9 @@ static int json_mount(const cJSON *root, struct mvod_camera *c, char *err, size_
 	const cJSON *h = cJSON_GetObjectItemCaseSensitive(m, "height_m");
 	const cJSON *p = cJSON_GetObjectItemCaseSensitive(m, "pitch_deg");
 	const cJSON *r = cJSON_GetObjectItemCaseSensitive(m, "roll_deg");
-	if (!cJSON_IsObject(m) || !cJSON_IsNumber(h) || !(h->valuedouble > 0) ||
-	    !(h->valuedouble <= MVOD_MOUNT_MAX_HEIGHT_M) || (p && !cJSON_IsNumber(p)) ||
+	if (!cJSON_IsObject(m) || !cJSON_IsNumber(h) || (p && !cJSON_IsNumber(p)) ||
 	    (r && !cJSON_IsNumber(r)) ||
-	    (p && !(fabs(p->valuedouble) <= MVOD_MOUNT_MAX_ANGLE_DEG)) ||
-	    (r && !(fabs(r->valuedouble) <= MVOD_MOUNT_MAX_ANGLE_DEG)))
+	    !mvod_calib_mount_ok(h->valuedouble, p ? p->valuedouble : 0, r ? r->valuedouble : 0))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "\"mount\" must be {\"height_m\": metres above the ground, in (0, %g], "
 				 "\"pitch_deg\": degrees down, \"roll_deg\": degrees, each within "
