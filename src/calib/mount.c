@@ -326,7 +326,8 @@ static int write_filestorage(const char *path, const char *text, const struct mv
 int mvod_mount_write(const char *path, const char *text, const struct mvod_mount *m, char *err,
 		     size_t errlen)
 {
-	if (text[strspn(text, " \t\r\n")] != '{')
+	char first = text[strspn(text, " \t\r\n")];
+	if (first != '{' && first != '[') /* JSON: mvod's object, or another tool's array */
 		return write_filestorage(path, text, m, err, errlen);
 	cJSON *root = cJSON_Parse(text);
 	const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
