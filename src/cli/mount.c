@@ -172,8 +172,11 @@ static int open_camera(const struct cli *c, struct mvod_camera *cam, char **text
 			     sizeof(err));
 	if (!ret && fmt != MVOD_CALIB_FMT_MVOD)
 		ret = check_editable(c->calib, *text, err, sizeof(err));
-	if (ret)
+	if (ret) {
 		LOG(ERROR, "%s", err);
+		free(*text); /* NULL when the read failed */
+		*text = NULL;
+	}
 	return ret;
 }
 
