@@ -111,13 +111,26 @@ int mvod_motion_rotation_only(const double *x1, const double *x2, const uint8_t 
 	return mvod_nearest_rotation(C, R, NULL);
 }
 
+/*
+ * R (x1, 1) projected, minus x2, into d: false when it points behind the camera. R (x1, 1) is
+ * summed inline, in mvod_mat3_vec's order (the same doubles, no call: the rotation RANSAC's
+ * inner loop).
+ */
+static bool rotation_offset(const double R[9], const double x1[2], const double x2[2],
+			    double d[2])
+{
+	double pz = R[6] * x1[0] + R[7] * x1[1] + R[8];
+	if (pz <= 1e-9)
+		return false;
+	d[0] = (R[0] * x1[0] + R[1] * x1[1] + R[2]) / pz - x2[0];
+	d[1] = (R[3] * x1[0] + R[4] * x1[1] + R[5]) / pz - x2[1];
+	return true;
+}
+
 double mvod_motion_rotation_residual(const double R[9], const double x1[2], const double x2[2])
 {
-	double r[3] = {x1[0], x1[1], 1.0}, p[3];
-	mvod_mat3_vec(R, r, p);
-	if (p[2] <= 1e-9)
-		return INFINITY;
-	return hypot(p[0] / p[2] - x2[0], p[1] / p[2] - x2[1]);
+	double d[2];
+	return rotation_offset(R, x1, x2, d) ? hypot(d[0], d[1]) : INFINITY;
 }
 
 /*
@@ -130,13 +143,8 @@ double mvod_motion_rotation_residual(const double R[9], const double x1[2], cons
 static bool rotation_inlier(const double R[9], const double x1[2], const double x2[2],
 			    double thresh2)
 {
-	/* R (x1, 1) as mvod_mat3_vec sums it, inline: the same doubles, no call. */
-	double pz = R[6] * x1[0] + R[7] * x1[1] + R[8];
-	if (pz <= 1e-9)
-		return false;
-	double dx = (R[0] * x1[0] + R[1] * x1[1] + R[2]) / pz - x2[0];
-	double dy = (R[3] * x1[0] + R[4] * x1[1] + R[5]) / pz - x2[1];
-	return dx * dx + dy * dy < thresh2;
+	double d[2];
+	return rotation_offset(R, x1, x2, d) && d[0] * d[0] + d[1] * d[1] < thresh2;
 }
 
 /*
