@@ -235,7 +235,8 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
  * flat keys like image_width the same way in YAML and XML, and mvod mount replaces a scalar's
  * text in place, keeping every other byte of the file (see mvod_calib_filestorage_set_mount).
  */
-static const char *const mount_keys[3] = {"mount_height_m", "mount_pitch_deg", "mount_roll_deg"};
+const char *const mvod_calib_mount_keys[3] = {"mount_height_m", "mount_pitch_deg",
+						"mount_roll_deg"};
 
 static bool read_double(struct fs_node n, double *out)
 {
@@ -255,13 +256,14 @@ static int read_mount(struct fs_node root, struct mvod_camera *c, char *err, siz
 	double v[3] = {0, 0, 0};
 	bool any = false, ok = true;
 	for (int i = 0; i < 3; i++) {
-		struct fs_node n = child(root, mount_keys[i]);
+		struct fs_node n = child(root, mvod_calib_mount_keys[i]);
 		any = any || present(n);
 		ok = ok && (!present(n) || read_double(n, &v[i]));
 	}
 	if (!any)
 		return 0;
-	if (!ok || !present(child(root, mount_keys[0])) || !mvod_calib_mount_ok(v[0], v[1], v[2]))
+	if (!ok || !present(child(root, mvod_calib_mount_keys[0])) ||
+	    !mvod_calib_mount_ok(v[0], v[1], v[2]))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "the mount must be \"mount_height_m\": metres above the ground, in "
 				 "(0, %g], \"mount_pitch_deg\": degrees down, \"mount_roll_deg\": "
@@ -463,9 +465,10 @@ static int mount_edits(const char *text, yaml_document_t *doc, const double moun
 		strcat(add->s, "\n");
 	*n = 1;
 	for (int i = 0; i < 3; i++) {
-		struct fs_node v = child(r, mount_keys[i]);
+		struct fs_node v = child(r, mvod_calib_mount_keys[i]);
 		if (v.y && v.y->type != YAML_SCALAR_NODE)
-			return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be a number", mount_keys[i]);
+			return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be a number",
+					 mvod_calib_mount_keys[i]);
 		if (v.y) {
 			e[*n] = (struct fs_edit){.at = byte_at(text, v.y->start_mark.index),
 						 .end = byte_at(text, v.y->end_mark.index)};
@@ -474,7 +477,7 @@ static int mount_edits(const char *text, yaml_document_t *doc, const double moun
 		}
 		size_t len = strlen(add->s);
 		snprintf(add->s + len, sizeof(add->s) - len, "%*s%s: ", (int)first->start_mark.column, "",
-			 mount_keys[i]);
+			 mvod_calib_mount_keys[i]);
 		add_number(add->s, sizeof(add->s), mount[i]);
 		strncat(add->s, "\n", sizeof(add->s) - strlen(add->s) - 1);
 	}

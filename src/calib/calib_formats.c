@@ -141,10 +141,9 @@ int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *e
 	put_ros_matrix(f, "projection_matrix", 3, 4, P);
 	/* ROS's parsers ignore keys they do not know; mvod reads these back. */
 	if (cam->has_mount) {
-		static const char *const keys[3] = {"mount_height_m", "mount_pitch_deg", "mount_roll_deg"};
 		const double v[3] = {cam->mount_height_m, cam->mount_pitch_deg, cam->mount_roll_deg};
 		for (int i = 0; i < 3; i++) {
-			fprintf(f, "%s: ", keys[i]);
+			fprintf(f, "%s: ", mvod_calib_mount_keys[i]);
 			put_number(f, v[i]);
 			fputc('\n', f);
 		}

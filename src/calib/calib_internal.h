@@ -7,6 +7,9 @@
 
 #include "mvod/calib.h"
 
+/* The mount's keys in OpenCV and ROS camera files: height (m), pitch and roll (deg). */
+extern const char *const mvod_calib_mount_keys[3];
+
 /* A mount within every camera format's bounds: height in (0, MAX], pitch and roll within +-MAX. */
 static inline bool mvod_calib_mount_ok(double height_m, double pitch_deg, double roll_deg)
 {
