@@ -60,7 +60,10 @@ static void usage(FILE *out)
 "\n");
 	cli_usage_input(out);
 	cli_usage_vo(out);
+	fprintf(out, "Output (a single configuration, not --sweep):\n");
+	cli_usage_files(out);
 	fprintf(out,
+"\n"
 "Benchmark:\n"
 "  --sweep [GRID]        run a grid of configurations, one fresh process each, one after\n"
 "                        the other; print them sorted by err_avg. GRID: axes 'key=v1,v2'\n"
@@ -377,7 +380,7 @@ static int reject_run_only(const struct mvod_config *cfg)
 		if (!mvod_config_keys[k].run_only || !(cfg->set & (1ULL << k)))
 			continue;
 		fprintf(stderr, "%s: --%s applies only to mvod run (the bench publishes nothing over "
-				"LCM, writes no trajectory and evaluates the camera's poses); see %s "
+				"LCM and evaluates the camera's poses in the camera frame); see %s "
 				"--help\n", cli_prog, mvod_config_keys[k].flag, cli_prog);
 		return -EINVAL;
 	}
@@ -410,6 +413,13 @@ static int parse_cli(int argc, char **argv, struct bench *b)
 	b->cfg.run.require_gt = 1;
 	if (!b->grid)
 		return 0;
+	/* Every child of a sweep would write the same file over the last one's. */
+	if (b->cfg.run.trajectory || b->cfg.run.plot) {
+		fprintf(stderr, "%s: --%s writes one run's poses: give it without --sweep (the "
+				"sweep's own outputs are --report, --csv and --plots); see %s --help\n",
+			cli_prog, b->cfg.run.trajectory ? "trajectory" : "plot", cli_prog);
+		return -EINVAL;
+	}
 	b->grid_copy = strdup(b->grid);
 	b->sw = calloc(1, sizeof(*b->sw));
 	return b->grid_copy && b->sw ? parse_grid(b->grid_copy, &b->cfg.run.vo, b->sw) : -ENOMEM;

@@ -130,6 +130,15 @@ void cli_usage_input(FILE *out)
 "\n");
 }
 
+/* The run's files, which mvod run and a single mvod bench run both write. */
+void cli_usage_files(FILE *out)
+{
+	fprintf(out,
+"  --trajectory FILE     write every pose to FILE (complete lines only, even if killed)\n"
+"  --format tum|kitti    trajectory format (default: kitti for *.kitti, else tum)\n"
+"  --plot FILE.png       top-down plot of the path (with ground truth when --gt is given)\n");
+}
+
 void cli_usage_vo(FILE *out)
 {
 	fprintf(out,

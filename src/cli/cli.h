@@ -71,6 +71,7 @@ void cli_options_join(struct option *dst, bool with_run, const struct option *ow
 /* Usage text of the shared groups. */
 void cli_usage_input(FILE *out);
 void cli_usage_vo(FILE *out);
+void cli_usage_files(FILE *out);
 void cli_usage_general(FILE *out);
 
 /* --frontend klt with a descriptor option: -EINVAL after saying which (mvod_vo_check_frontend). */

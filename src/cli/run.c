@@ -57,10 +57,9 @@ static void usage_output(FILE *out)
 "                        out on the same name with a 2 appended (MVOD_POSE2)\n"
 "  --status-channel NAME LCM channel of mvod.status_t (default MVOD_STATUS); status2_t: +2\n"
 "  --status-rate HZ      mvod.status_t messages per second, 0.1 to 100 (default 1); also\n"
-"                        on every state change\n"
-"  --trajectory FILE     write every pose to FILE (complete lines only, even if killed)\n"
-"  --format tum|kitti    trajectory format (default: kitti for *.kitti, else tum)\n"
-"  --plot FILE.png       top-down plot of the path (with ground truth when --gt is given)\n"
+"                        on every state change\n");
+	cli_usage_files(out);
+	fprintf(out,
 "  --frame camera|ros    axes of the poses on LCM and in --trajectory: camera (default; the\n"
 "                        first camera frame, x right, y down, z forward) or ros (the body\n"
 "                        frame at the first frame, x forward, y left, z up); the evaluation\n"

@@ -105,8 +105,9 @@ static void test_one_configuration(void **state)
 	 * default) loses this 40-frame turn's sharpest frames (5.6 deg a frame, frames 21-23) and
 	 * measured 0.107 here, see BENCHMARKS.md, "The default front end and track cap".
 	 */
+	const char *traj = harness_tmp_path("one.tum");
 	bench(&r, gt_tum, "--scale", "gt", "--frontend", "orb", "--csv", csv, "--report", md,
-	      "--plots", plots, NULL);
+	      "--plots", plots, "--trajectory", traj, NULL);
 	if (r.status != 0)
 		fail_msg("mvod bench failed (%d): %s", r.status, r.err);
 	char cells[2][NCOLS][40], header[4096];
@@ -142,6 +143,10 @@ static void test_one_configuration(void **state)
 	harness_read_file(md, text, sizeof(text));
 	assert_int_equal(count_substr(text, "\n"), 3);
 	assert_int_equal(count_substr(text, "| orb | bf |"), 1);
+	/* The run's poses, for an evaluation outside mvod: one TUM line a frame. */
+	char poses[65536];
+	harness_read_file(traj, poses, sizeof(poses));
+	assert_int_equal(count_substr(poses, "\n"), FRAMES);
 	const char *pngs[] = {"path-top.png", "path-side.png", "errors.png"};
 	for (int i = 0; i < 3; i++) {
 		char p[400];
@@ -311,6 +316,11 @@ static void test_bad_usage(void **state)
 		assert_int_equal(r.status, 2);
 		assert_non_null(strstr(r.err, cases[i][1]));
 	}
+	/* Every child of a sweep would write one run's trajectory over the last one's. */
+	struct run_result sw;
+	bench(&sw, gt_kitti, "--sweep=tracks=250,500", "--trajectory=t.tum", NULL);
+	assert_int_equal(sw.status, 2);
+	assert_non_null(strstr(sw.err, "--trajectory writes one run's poses"));
 	/* No ground truth: nothing to measure against. */
 	char *argv[] = {(char *)harness_bin("MVOD"), "bench", "--source", video, "--calib", calib,
 			NULL};
