@@ -524,18 +524,95 @@ static bool same_but_mount(const struct mvod_camera *a, const struct mvod_camera
 	       b->mount_height_m == m[0] && b->mount_pitch_deg == m[1] && b->mount_roll_deg == m[2];
 }
 
+/*
+ * The edit is checked by reading it back: a file is never written that would not read as the
+ * same camera with the mount m. On a refusal *out is freed and NULL.
+ */
+static int read_back(const struct mvod_camera *before, const double m[3], char **out, char *err,
+		     size_t errlen)
+{
+	struct mvod_camera after;
+	char why[256];
+	if (!mvod_calib_parse_filestorage(*out, &after, NULL, why, sizeof(why)) &&
+	    same_but_mount(before, &after, m))
+		return 0;
+	free(*out);
+	*out = NULL;
+	return mvod_errf(err, errlen, -EINVAL, "the camera file with the mount set would not read "
+			 "back as the same camera: nothing written");
+}
+
+/*
+ * The mount set in an OpenCV XML file, through libxml2's tree: an element already at the top
+ * level has its text replaced, the others are added after the last one, each after a copy of
+ * the blank text that leads the root's first element (OpenCV's newline), so that the file keeps
+ * its layout: libxml2 writes back the whitespace, comments and text it read, and OpenCV's own
+ * XML (double-quoted attributes, no empty elements) byte for byte but for the mount.
+ */
+static int xml_set_mount(const char *text, const double mount[3], char **out, char *err,
+			 size_t errlen)
+{
+	xmlDoc *doc;
+	int ret = load_xml(text, &doc, err, errlen);
+	if (ret)
+		return ret;
+	xmlNode *root = xmlDocGetRootElement(doc);
+	const xmlChar *lead = BAD_CAST "\n";
+	for (xmlNode *c = root->children; c; c = c->next)
+		if (c->type == XML_ELEMENT_NODE) {
+			if (c->prev && xmlIsBlankNode(c->prev))
+				lead = c->prev->content;
+			break;
+		}
+	/* New elements go before the blank text that closes the root, if there is one. */
+	xmlNode *tail = root->last && xmlIsBlankNode(root->last) ? root->last : NULL;
+	for (int i = 0; i < 3 && !ret; i++) {
+		char v[32] = "";
+		add_number(v, sizeof(v), mount[i]);
+		struct fs_node have = child((struct fs_node){.x = root}, mvod_calib_mount_keys[i]);
+		if (have.x) {
+			xmlNodeSetContent(have.x, BAD_CAST v);
+			continue;
+		}
+		xmlNode *gap = xmlNewText(lead), *el = xmlNewNode(NULL, BAD_CAST mvod_calib_mount_keys[i]);
+		if (!gap || !el) {
+			xmlFreeNode(gap);
+			xmlFreeNode(el);
+			ret = -ENOMEM;
+			break;
+		}
+		xmlNodeSetContent(el, BAD_CAST v);
+		/* The element first: libxml2 merges a text node into a text neighbour (and frees it). */
+		if (tail)
+			xmlAddPrevSibling(tail, el);
+		else
+			xmlAddChild(root, el);
+		xmlAddPrevSibling(el, gap);
+	}
+	xmlChar *buf = NULL;
+	int len = 0;
+	if (!ret)
+		xmlDocDumpMemory(doc, &buf, &len);
+	xmlFreeDoc(doc);
+	if (!ret && (!buf || !(*out = strndup((const char *)buf, (size_t)len))))
+		ret = -ENOMEM;
+	xmlFree(buf);
+	return ret ? mvod_errf(err, errlen, ret, "out of memory") : 0;
+}
+
 int mvod_calib_filestorage_set_mount(const char *text, const double mount[3], char **out, char *err,
 				     size_t errlen)
 {
 	const char *p = text + strspn(text, " \t\r\n");
-	if (*p == '<')
-		return mvod_errf(err, errlen, -ENOTSUP, "an OpenCV XML camera file cannot be given a mount "
-				 "in place (libxml2 does not keep an XML file's layout byte for byte): "
-				 "convert it to YAML or mvod JSON with mvod calib-convert");
-	struct mvod_camera before, after;
+	struct mvod_camera before;
 	int ret = mvod_calib_parse_filestorage(text, &before, NULL, err, errlen);
 	if (ret)
 		return ret;
+	if (*p == '<') {
+		if ((ret = xml_set_mount(p, mount, out, err, errlen)))
+			return ret;
+		return read_back(&before, mount, out, err, errlen);
+	}
 	yaml_document_t doc;
 	size_t header_at = strncmp(p, "%YAML:", 6) == 0 ? (size_t)(p - text) : SIZE_MAX;
 	if ((ret = load_yaml(text, header_at, &doc, err, errlen)))
@@ -546,16 +623,5 @@ int mvod_calib_filestorage_set_mount(const char *text, const double mount[3], ch
 	yaml_document_delete(&doc);
 	if (!ret && (ret = apply_edits(text, e, n, out)))
 		return mvod_errf(err, errlen, ret, "out of memory");
-	if (ret)
-		return ret;
-	/* The edit is checked by reading it back: a file is never written that would not read. */
-	char why[256];
-	if (mvod_calib_parse_filestorage(*out, &after, NULL, why, sizeof(why)) ||
-	    !same_but_mount(&before, &after, mount)) {
-		free(*out);
-		*out = NULL;
-		return mvod_errf(err, errlen, -EINVAL, "the camera file with the mount set would not read "
-				 "back as the same camera: nothing written");
-	}
-	return 0;
+	return ret ? ret : read_back(&before, mount, out, err, errlen);
 }

@@ -38,9 +38,9 @@ static void usage(FILE *out)
 "                          chessboard:COLSxROWS:SQUARE_M             (inner corners)\n"
 "  --calib FILE          the camera file (required): its intrinsics are used, and its\n"
 "                        mount is written into it: mvod JSON (its \"mount\" block) or\n"
-"                        OpenCV/ROS YAML (mount_height_m, mount_pitch_deg, mount_roll_deg,\n"
-"                        every other byte kept); not XML or KITTI calib.txt (convert them\n"
-"                        with mvod calib-convert); replaced whole by temp+rename\n"
+"                        OpenCV/ROS YAML or OpenCV XML (mount_height_m, mount_pitch_deg,\n"
+"                        mount_roll_deg; the rest of the file kept); not KITTI calib.txt\n"
+"                        (convert it with mvod calib-convert); replaced whole by temp+rename\n"
 "  --board-thickness M   height of the board's printed face above the floor, metres\n"
 "                        (0..0.1, default 0): added to the height\n"
 "  --max-frames N        read at most N frames (default: the whole source)\n"
@@ -122,7 +122,7 @@ static int parse_cli(int argc, char **argv, struct cli *c)
 }
 
 /*
- * Whether a YAML camera file can take the mount (XML and flow-style YAML cannot), tried on a
+ * Whether an OpenCV/ROS camera file can take the mount (flow-style YAML cannot), tried on a
  * placeholder mount before any frame is read rather than after the measurement.
  */
 static int check_editable(const char *path, const char *text, char *err, size_t errlen)

@@ -194,13 +194,45 @@ static void test_measures_into_yaml(void **state)
 	assert_int_equal(keys, 3);
 }
 
-/* OpenCV XML: refused before any frame is read, with the way out; the file untouched. */
-static void test_xml_refused(void **state)
+/*
+ * Into OpenCV XML as mvod calib-convert (OpenCV's writer) lays it out: the mount added before
+ * the closing tag, every byte before it kept (a comment among them), measured as well as into
+ * mvod JSON; run again, the values replaced in place and nothing added.
+ */
+static void test_measures_into_xml(void **state)
 {
 	(void)state;
+	static char before[16384], after[16384], again[16384];
 	const char *calib = camera_converted(sheet, "sheet.xml");
-	refused(sheet, SHEET, calib, NULL, 1, "XML camera file cannot be given a mount");
-	refused(sheet, SHEET, calib, NULL, 1, "mvod calib-convert");
+	harness_read_file(calib, before, sizeof(before));
+	char *close = strstr(before, "</opencv_storage>");
+	assert_non_null(close);
+	strcpy(close, "<!-- kept as it is -->\n");
+	strcat(before, "</opencv_storage>\n");
+	harness_write_file(calib, before);
+	*strstr(before, "</opencv_storage>") = '\0';
+	for (int run = 0; run < 2; run++) {
+		struct run_result r;
+		mount_run(&r, sheet, SHEET, calib, NULL);
+		if (r.status != 0)
+			fail_msg("mvod mount failed (%d): %s", r.status, r.err);
+		harness_read_file(calib, run ? again : after, sizeof(after));
+	}
+	assert_memory_equal(after, before, strlen(before));
+	double h, pitch, roll;
+	char end[32];
+	assert_int_equal(sscanf(after + strlen(before), "<mount_height_m>%lf</mount_height_m>\n"
+				"<mount_pitch_deg>%lf</mount_pitch_deg>\n<mount_roll_deg>%lf"
+				"</mount_roll_deg>\n%31s", &h, &pitch, &roll, end), 4);
+	assert_string_equal(end, "</opencv_storage>");
+	struct mvod_camera cam;
+	char err[512];
+	assert_int_equal(mvod_calib_load(calib, &cam, err, sizeof(err)), 0);
+	/* The tolerances of measures(), for the same views. */
+	assert_true(cam.has_mount && cam.mount_height_m == h && cam.mount_pitch_deg == pitch);
+	assert_true(fabs(h - 0.5) <= 0.003 * 0.5 && fabs(pitch - 25) <= 0.15 && fabs(roll + 3) <= 0.15);
+	/* The same measurement again: the same file, the values where they were. */
+	assert_string_equal(again, after);
 }
 
 static void test_measures_mat(void **state)
@@ -394,7 +426,7 @@ int main(void)
 		cmocka_unit_test(test_measures_sheet),
 		cmocka_unit_test(test_measures_fisheye),
 		cmocka_unit_test(test_measures_into_yaml),
-		cmocka_unit_test(test_xml_refused),
+		cmocka_unit_test(test_measures_into_xml),
 		cmocka_unit_test(test_scale_height_uses_mount),
 		cmocka_unit_test(test_no_board),
 		cmocka_unit_test(test_board_not_flat),
