@@ -117,7 +117,7 @@ mutate: deps-test
 
 demo: build
 	@rm -rf $(DEMODIR) && mkdir -p $(DEMODIR)
-	$(BUILDDIR)/tools/mvod-synth --path turn --frames 150 --speed 3 --out $(DEMODIR)/synth
+	$(BUILDDIR)/tools/mvod-synth --path turn --frames 150 --speed 3 --codec raw --out $(DEMODIR)/synth
 	$(BUILDDIR)/mvod --source file:$(DEMODIR)/synth/video.mkv --calib $(DEMODIR)/synth/calib.json \
 		--gt $(DEMODIR)/synth/gt.tum --trajectory $(DEMODIR)/trajectory.tum \
 		--plot $(DEMODIR)/trajectory.png \

@@ -16,6 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+
 #include <cmocka.h>
 
 #include "harness.h"
@@ -129,12 +131,100 @@ static void test_colour(void **state)
 	drain(make("bgr.mkv", "ffv1:bgr0"), 'c', 1.0);
 }
 
+/* Bytes of the file at path. */
+static long long file_bytes(const char *path)
+{
+	struct stat st;
+	if (stat(path, &st))
+		fail_msg("%s: cannot stat", path);
+	return (long long)st.st_size;
+}
+
+/* The next frame of cap; fails on anything but a frame. */
+static void next_frame(struct mvod_capture *cap, struct mvod_frame *f)
+{
+	int epoch, ret;
+	while ((ret = mvod_capture_next(cap, 1000, f, &epoch)) == -EAGAIN)
+		;
+	assert_int_equal(ret, 0);
+}
+
+/*
+ * mvod-synth --codec raw (the cheap-to-decode sample) is lossless: the same frames, pixel for
+ * pixel, as its FFV1 default, the same count, then the end; and it is uncompressed (a file at
+ * least a frame's bytes a frame), so the two files really are two codecs.
+ */
+static void test_synth_raw(void **state)
+{
+	(void)state;
+	enum { N = 6, SW = 160, SH = 120 };
+	char ffv1[512], raw[512];
+	snprintf(ffv1, sizeof(ffv1), "%s", harness_tmp_path("synth_ffv1"));
+	snprintf(raw, sizeof(raw), "%s", harness_tmp_path("synth_raw"));
+	harness_synth(ffv1, "turn", N, "mkv", "--size", "160x120", NULL);
+	harness_synth(raw, "turn", N, "mkv", "--size", "160x120", "--codec", "raw", NULL);
+	char uri[2][600], err[512] = "";
+	snprintf(uri[0], sizeof(uri[0]), "file:%s/video.mkv", ffv1);
+	snprintf(uri[1], sizeof(uri[1]), "file:%s/video.mkv", raw);
+	assert_true(file_bytes(uri[1] + 5) >= (long long)N * SW * SH);
+	assert_true(file_bytes(uri[0] + 5) < file_bytes(uri[1] + 5));
+	struct mvod_source *src[2] = {NULL, NULL};
+	struct mvod_capture *cap[2] = {NULL, NULL};
+	for (int k = 0; k < 2; k++) {
+		if (mvod_source_open(uri[k], &src[k], err, sizeof(err)))
+			fail_msg("%s: %s", uri[k], err);
+		assert_int_equal(mvod_capture_start(src[k], uri[k], &cap[k]), 0);
+	}
+	for (int i = 0; i < N; i++) {
+		struct mvod_frame a, b;
+		next_frame(cap[0], &a);
+		next_frame(cap[1], &b);
+		assert_int_equal(a.index, i);
+		assert_int_equal(b.index, i);
+		assert_int_equal(a.utime, b.utime);
+		assert_int_equal(b.img.w, SW);
+		assert_int_equal(b.img.h, SH);
+		assert_int_equal(a.img.fmt, MVOD_PIX_GREY);
+		assert_int_equal(b.img.fmt, MVOD_PIX_GREY);
+		for (int y = 0; y < SH; y++)
+			if (memcmp(a.img.data + y * a.img.stride, b.img.data + y * b.img.stride, SW))
+				fail_msg("frame %d row %d differs between FFV1 and raw", i, y);
+	}
+	for (int k = 0; k < 2; k++) {
+		struct mvod_frame f;
+		int epoch, ret;
+		while ((ret = mvod_capture_next(cap[k], 1000, &f, &epoch)) == -EAGAIN)
+			;
+		assert_int_equal(ret, -ENODATA);
+		mvod_capture_stop(cap[k]);
+	}
+}
+
+/* --codec names one of two codecs, for video.mkv only: anything else is a usage error. */
+static void test_synth_codec_usage(void **state)
+{
+	(void)state;
+	char *png[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", (char *)harness_tmp_path("codec_png"),
+		       "--format", "png", "--codec", "raw", NULL};
+	char *h264[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", (char *)harness_tmp_path("codec_h264"),
+			"--codec", "h264", NULL};
+	char **argvs[] = {png, h264};
+	for (int k = 0; k < 2; k++) {
+		struct run_result r;
+		assert_int_equal(harness_run(argvs[k], &r), 0);
+		assert_true(r.exited && r.status == 2);
+		assert_non_null(strstr(r.err, "--codec"));
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_grey),
 		cmocka_unit_test(test_yuv),
 		cmocka_unit_test(test_colour),
+		cmocka_unit_test(test_synth_raw),
+		cmocka_unit_test(test_synth_codec_usage),
 	};
 	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }
