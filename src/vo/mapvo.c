@@ -85,6 +85,7 @@ int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)
 		return -ENOMEM;
 	mv->cap = vo->cap;
 	mv->ba_sync = vo->p.ba_sync;
+	mv->free_scale = vo->p.scale_mode == MVOD_SCALE_MODE_AUTO;
 	mvod_map_params_default(&mv->mp);
 	mv->mp.kp_cap = vo->cap;
 	mv->K[0] = vo->cam.fx, mv->K[1] = vo->cam.fy, mv->K[2] = vo->cam.cx, mv->K[3] = vo->cam.cy;
