@@ -201,3 +201,204 @@ int mvod_motion_rotation_ransac(const double *x1, const double *x2, int n, doubl
 	}
 	return best >= 2 ? rotation_inliers(x1, x2, n, R, thresh, mask, 0) : 0;
 }
+
+/* Sampson distance of x1 -> x2 under E (normalised units), signed. */
+static double sampson(const double E[9], const double x1[2], const double x2[2])
+{
+	double a[3] = {E[0] * x1[0] + E[1] * x1[1] + E[2], E[3] * x1[0] + E[4] * x1[1] + E[5],
+		       E[6] * x1[0] + E[7] * x1[1] + E[8]};
+	double b0 = E[0] * x2[0] + E[3] * x2[1] + E[6], b1 = E[1] * x2[0] + E[4] * x2[1] + E[7];
+	double num = x2[0] * a[0] + x2[1] * a[1] + a[2];
+	double den = a[0] * a[0] + a[1] * a[1] + b0 * b0 + b1 * b1;
+	return den > 1e-30 ? num / sqrt(den) : 0.0;
+}
+
+/* E = [t]x R. */
+static void essential(const double R[9], const double t[3], double E[9])
+{
+	const double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+	mvod_mat3_mul(tx, R, E);
+}
+
+/* A basis u, v of the plane orthogonal to unit t. */
+static void tangent(const double t[3], double u[3], double v[3])
+{
+	double e[3] = {0, 0, 0};
+	int k = fabs(t[0]) < fabs(t[1]) ? (fabs(t[0]) < fabs(t[2]) ? 0 : 2)
+					 : (fabs(t[1]) < fabs(t[2]) ? 1 : 2);
+	e[k] = 1;
+	u[0] = t[1] * e[2] - t[2] * e[1];
+	u[1] = t[2] * e[0] - t[0] * e[2];
+	u[2] = t[0] * e[1] - t[1] * e[0];
+	double nu = mvod_vec3_norm(u);
+	for (int j = 0; j < 3; j++)
+		u[j] /= nu;
+	v[0] = t[1] * u[2] - t[2] * u[1];
+	v[1] = t[2] * u[0] - t[0] * u[2];
+	v[2] = t[0] * u[1] - t[1] * u[0];
+}
+
+/* The pose moved by p = (w, a, b): R' = exp(w) R, t' = t + a u + b v, normalised. */
+static void perturb(const double R[9], const double t[3], const double u[3], const double v[3],
+		    const double p[5], double Ro[9], double to[3])
+{
+	double dR[9];
+	mvod_rot_exp(p, dR);
+	mvod_mat3_mul(dR, R, Ro);
+	for (int k = 0; k < 3; k++)
+		to[k] = t[k] + p[3] * u[k] + p[4] * v[k];
+	double nt = mvod_vec3_norm(to);
+	for (int k = 0; k < 3; k++)
+		to[k] /= nt;
+}
+
+/* Match i's residual in sigma units. */
+static double weighted(const double E[9], const double *x1, const double *x2, const double *w,
+		       int i)
+{
+	return sampson(E, x1 + 2 * i, x2 + 2 * i) * (w ? w[i] : 1.0);
+}
+
+/* Huber's cost at k of the weighted Sampson residuals of the points with mask set. */
+static double huber_cost(const double R[9], const double t[3], const double *x1, const double *x2,
+			 const double *w, const uint8_t *mask, int n, double k)
+{
+	double E[9], c = 0;
+	essential(R, t, E);
+	for (int i = 0; i < n; i++) {
+		if (!mask[i])
+			continue;
+		double r = fabs(weighted(E, x1, x2, w, i));
+		c += r <= k ? 0.5 * r * r : k * (r - 0.5 * k);
+	}
+	return c;
+}
+
+/* Solves the 5 x 5 system A x = b in place (Gaussian elimination, partial pivoting). */
+static bool solve5(double A[25], double b[5])
+{
+	for (int c = 0; c < 5; c++) {
+		int piv = c;
+		for (int r = c + 1; r < 5; r++)
+			if (fabs(A[5 * r + c]) > fabs(A[5 * piv + c]))
+				piv = r;
+		if (!(fabs(A[5 * piv + c]) > 1e-300))
+			return false;
+		for (int q = 0; q < 5; q++) {
+			double s = A[5 * c + q];
+			A[5 * c + q] = A[5 * piv + q];
+			A[5 * piv + q] = s;
+		}
+		double s = b[c];
+		b[c] = b[piv];
+		b[piv] = s;
+		for (int r = c + 1; r < 5; r++) {
+			double f = A[5 * r + c] / A[5 * c + c];
+			for (int q = c; q < 5; q++)
+				A[5 * r + q] -= f * A[5 * c + q];
+			b[r] -= f * b[c];
+		}
+	}
+	for (int c = 4; c >= 0; c--) {
+		for (int q = c + 1; q < 5; q++)
+			b[c] -= A[5 * c + q] * b[q];
+		b[c] /= A[5 * c + c];
+	}
+	return true;
+}
+
+/* Gauss-Newton's normal equations at (R, t) along the 5 parameters of perturb(). */
+static void normal_equations(const double R[9], const double t[3], const double u[3],
+			     const double v[3], const double *x1, const double *x2, const double *w,
+			     const uint8_t *mask, int n, double k, double A[25], double g[5])
+{
+	/* Forward differences: the residuals are smooth, and 1e-7 rad keeps 8-9 digits. */
+	const double h = 1e-7;
+	double E[9], Ep[5][9];
+	essential(R, t, E);
+	for (int p = 0; p < 5; p++) {
+		double d[5] = {0}, Rp[9], tp[3];
+		d[p] = h;
+		perturb(R, t, u, v, d, Rp, tp);
+		essential(Rp, tp, Ep[p]);
+	}
+	memset(A, 0, 25 * sizeof(double));
+	memset(g, 0, 5 * sizeof(double));
+	for (int i = 0; i < n; i++) {
+		if (!mask[i])
+			continue;
+		double r = weighted(E, x1, x2, w, i), J[5];
+		for (int p = 0; p < 5; p++)
+			J[p] = (weighted(Ep[p], x1, x2, w, i) - r) / h;
+		double hw = fabs(r) <= k ? 1.0 : k / fabs(r); /* Huber's weight */
+		for (int a = 0; a < 5; a++) {
+			g[a] += hw * J[a] * r;
+			for (int b = 0; b < 5; b++)
+				A[5 * a + b] += hw * J[a] * J[b];
+		}
+	}
+}
+
+int mvod_motion_refine(double R[9], double t[3], const double *x1, const double *x2,
+		       const double *w, const uint8_t *mask, int n, double k, int iterations)
+{
+	double nt = mvod_vec3_norm(t);
+	if (!(nt > 0) || !(k > 0))
+		return -EINVAL;
+	for (int j = 0; j < 3; j++)
+		t[j] /= nt;
+	double lambda = 1e-3, cost = huber_cost(R, t, x1, x2, w, mask, n, k);
+	int steps = 0;
+	for (int it = 0; it < iterations; it++) {
+		double u[3], v[3], A[25], g[5];
+		tangent(t, u, v);
+		normal_equations(R, t, u, v, x1, x2, w, mask, n, k, A, g);
+		bool improved = false;
+		/* Levenberg-Marquardt: the damping grows until a step lowers the cost. */
+		for (int tries = 0; tries < 10 && !improved; tries++) {
+			double M[25], x[5], Rn[9], tn[3];
+			memcpy(M, A, sizeof(M));
+			for (int a = 0; a < 5; a++) {
+				M[6 * a] += lambda * A[6 * a];
+				x[a] = -g[a];
+			}
+			if (!solve5(M, x))
+				return steps;
+			perturb(R, t, u, v, x, Rn, tn);
+			double cn = huber_cost(Rn, tn, x1, x2, w, mask, n, k);
+			if (cn < cost) {
+				memcpy(R, Rn, sizeof(Rn));
+				memcpy(t, tn, sizeof(tn));
+				cost = cn;
+				lambda = fmax(0.1 * lambda, 1e-9);
+				improved = true;
+				steps++;
+			} else {
+				lambda *= 10;
+			}
+		}
+		if (!improved)
+			break;
+	}
+	return steps;
+}
+
+int mvod_motion_epipolar_inliers(const double R[9], const double t[3], const double *x1,
+				 const double *x2, const double *w, int n, double thresh,
+				 uint8_t *mask)
+{
+	double E[9];
+	int count = 0;
+	essential(R, t, E);
+	for (int i = 0; i < n; i++) {
+		mask[i] = fabs(weighted(E, x1, x2, w, i)) < thresh;
+		count += mask[i];
+	}
+	return count;
+}
+
+int mvod_motion_depths(const double R[9], const double t[3], const double *x1, const double *x2,
+		       const uint8_t *mask, int n, double *depth1)
+{
+	return count_in_front(R, t, x1, x2, mask, n, depth1);
+}

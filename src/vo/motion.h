@@ -68,4 +68,30 @@ double mvod_motion_rotation_residual(const double R[9], const double x1[2], cons
 int mvod_motion_rotation_ransac(const double *x1, const double *x2, int n, double thresh,
 				int iterations, uint8_t *mask, double R[9]);
 
+/*
+ * Refines a two-view motion X2 = R X1 + t (t normalised on return) on the points with mask
+ * set: Levenberg-Marquardt over the rotation and the unit translation's direction (5
+ * parameters) on the Sampson distance of E = [t]x R, each residual times w[i] (1 / its
+ * point's sigma; NULL = all 1), with Huber's weight beyond k (normalised units), at most
+ * iterations steps. Returns the steps taken (0: (R, t) was already the minimum), -EINVAL for
+ * a zero t or k <= 0.
+ */
+int mvod_motion_refine(double R[9], double t[3], const double *x1, const double *x2,
+		       const double *w, const uint8_t *mask, int n, double k, int iterations);
+
+/*
+ * Marks in mask the points whose Sampson distance under E = [t]x R, times w[i] (NULL = 1), is
+ * below thresh (normalised units); returns how many.
+ */
+int mvod_motion_epipolar_inliers(const double R[9], const double t[3], const double *x1,
+				 const double *x2, const double *w, int n, double thresh,
+				 uint8_t *mask);
+
+/*
+ * The points with mask set in front of both cameras of R, t (as mvod_motion_cheirality counts
+ * them); their depths in camera 1 into depth1 (0 for the others; may be NULL).
+ */
+int mvod_motion_depths(const double R[9], const double t[3], const double *x1, const double *x2,
+		       const uint8_t *mask, int n, double *depth1);
+
 #endif

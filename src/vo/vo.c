@@ -552,14 +552,18 @@ static int klt_track(struct mvod_vo *vo, const struct mvod_image *grey)
 }
 
 /*
- * --scale height with ORB: as klt_track's share, detected on the band with FAST's contrast
- * lowered; ORB's own 2000 features found no ground on KITTI 06, whose steps then stayed held
- * for want of a first scale (the whole clip at the origin).
+ * ORB, every scale mode: as klt_track's share, detected on the road band with FAST's contrast
+ * lowered. --scale height needs it: ORB's own 2000 features found no ground on KITTI 06, whose
+ * steps then stayed held for want of a first scale (the whole clip at the origin). The others
+ * too: ORB's strongest corners cluster on buildings and cars, mostly far, whose flow hardly
+ * depends on the translation; the road's near points, with the largest parallax, pin its
+ * direction (with twoview.c's refinement, KITTI 07's direction error per frame 3.22 -> 1.19
+ * deg; BENCHMARKS.md, issue 12's "ORB's two-view pose refined").
  */
 static int orb_detect(struct mvod_vo *vo, const struct mvod_image *grey)
 {
 	float quad[8];
-	if (vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT || mvod_vo_band_quad(vo, quad) != 0)
+	if (mvod_vo_band_quad(vo, quad) != 0)
 		return mvod_cv_detect(vo->det, grey, &vo->cur->f);
 	return mvod_cv_detect_band(vo->det, grey, quad, vo->p.max_features / BAND_SHARE,
 				   BAND_FAST, &vo->cur->f);

@@ -172,6 +172,84 @@ static void test_median(void **state)
 	assert_true(mvod_median(w, 4) == 7);
 }
 
+/*
+ * twoview.c's refinement for ORB: from a motion 0.6 deg and 3 deg off, fitted on half the good
+ * matches (MAGSAC's mask is its sample's support, not every inlier), the inliers chosen under
+ * that fit are exactly the good matches (a fifth are garbage), and the fit on them is the truth.
+ */
+static void test_refine(void **state)
+{
+	(void)state;
+	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
+	motion(R, t);
+	scene(R, t, X, x1, x2);
+	for (int i = 0; i < N; i += 5) {
+		x2[2 * i] += 0.05 * ((i % 3) - 1) + 0.03;
+		x2[2 * i + 1] -= 0.04;
+	}
+	double w0[3] = {0.01, 0.0, 0.0}, dR0[9], Rs[9], ts[3] = {t[0] + 0.05, t[1], t[2]};
+	mvod_rot_exp(w0, dR0);
+	mvod_mat3_mul(dR0, R, Rs);
+	uint8_t mask[N];
+	for (int i = 0; i < N; i++)
+		mask[i] = i % 5 != 0 && i % 2 == 0;
+	const double k = 1.0 / 500; /* 1 px at f = 500, as robust_with_outliers */
+	assert_true(mvod_motion_refine(Rs, ts, x1, x2, NULL, mask, N, k, 10) > 0);
+	assert_true(fabs(mvod_vec3_norm(ts) - 1.0) < 1e-12);
+	assert_int_equal(mvod_motion_epipolar_inliers(Rs, ts, x1, x2, NULL, N, k, mask), N - N / 5);
+	for (int i = 0; i < N; i++)
+		assert_int_equal(mask[i], i % 5 != 0);
+	mvod_motion_refine(Rs, ts, x1, x2, NULL, mask, N, k, 10);
+	double dR[9];
+	mvod_mat3_mul_bt(Rs, R, dR);
+	/* Exact data: the minimum is the truth, to the forward differences' 1e-7 and rounding. */
+	assert_true(mvod_rot_angle(dR) < 1e-7);
+	assert_true(mvod_vec3_angle(ts, t) < 1e-6);
+	double depth[N];
+	assert_int_equal(mvod_motion_depths(Rs, ts, x1, x2, mask, N, depth), N - N / 5);
+	for (int i = 0; i < N; i++)
+		assert_true(mask[i] ? fabs(depth[i] - X[3 * i + 2]) < 1e-5 * X[3 * i + 2]
+				    : depth[i] == 0.0);
+	/* From the truth it stays there (steps may still lower the cost's rounding). */
+	memcpy(Rs, R, sizeof(Rs));
+	memcpy(ts, t, sizeof(ts));
+	assert_true(mvod_motion_refine(Rs, ts, x1, x2, NULL, mask, N, k, 10) >= 0);
+	mvod_mat3_mul_bt(Rs, R, dR);
+	assert_true(mvod_rot_angle(dR) < 1e-9);
+	assert_true(mvod_vec3_angle(ts, t) < 1e-9);
+	double t0[3] = {0, 0, 0};
+	assert_int_equal(mvod_motion_refine(Rs, t0, x1, x2, NULL, mask, N, k, 10), -EINVAL);
+}
+
+/*
+ * The weights: a match moved 2.5 px off its epipolar line in image 2 (a Sampson distance of
+ * about 2.5 / sqrt(2) = 1.8 px: the distance shares the error between both images) is no
+ * inlier at 1 px and sigma 1, and is one at sigma 2.
+ */
+static void test_epipolar_inliers_weights(void **state)
+{
+	(void)state;
+	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N], w[N];
+	motion(R, t);
+	scene(R, t, X, x1, x2);
+	/* Moved along the normal of its epipolar line l = E x1 (in the image plane). */
+	double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0}, E[9];
+	mvod_mat3_mul(tx, R, E);
+	const double p1[3] = {x1[0], x1[1], 1.0};
+	double l[3];
+	mvod_mat3_vec(E, p1, l);
+	double ln = hypot(l[0], l[1]);
+	x2[0] += 2.5 / 500 * l[0] / ln;
+	x2[1] += 2.5 / 500 * l[1] / ln;
+	uint8_t mask[N];
+	for (int i = 0; i < N; i++)
+		w[i] = 1.0;
+	assert_int_equal(mvod_motion_epipolar_inliers(R, t, x1, x2, w, N, 1.0 / 500, mask), N - 1);
+	assert_int_equal(mask[0], 0);
+	w[0] = 0.5;
+	assert_int_equal(mvod_motion_epipolar_inliers(R, t, x1, x2, w, N, 1.0 / 500, mask), N);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -182,6 +260,8 @@ int main(void)
 		cmocka_unit_test(test_relative_scale),
 		cmocka_unit_test(test_rotation_only),
 		cmocka_unit_test(test_median),
+		cmocka_unit_test(test_refine),
+		cmocka_unit_test(test_epipolar_inliers_weights),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
