@@ -80,16 +80,21 @@ static void test_decompose_and_cheirality(void **state)
 		assert_true(fabs(depth[i] - X[3 * i + 2]) < 1e-6 * X[3 * i + 2]);
 }
 
-static void robust_with_outliers(bool magsac)
+/* The motion and scene above, every fifth correspondence garbage. */
+static void scene_with_outliers(double R[9], double t[3], double *X, double *x1, double *x2)
 {
-	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
 	motion(R, t);
 	scene(R, t, X, x1, x2);
-	/* Every fifth correspondence is garbage. */
 	for (int i = 0; i < N; i += 5) {
 		x2[2 * i] += 0.05 * ((i % 3) - 1) + 0.03;
 		x2[2 * i + 1] -= 0.04;
 	}
+}
+
+static void robust_with_outliers(bool magsac)
+{
+	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
+	scene_with_outliers(R, t, X, x1, x2);
 	double E[9], R1[9], R2[9], tu[3], Rb[9], tb[3];
 	uint8_t mask[N];
 	int inl = 0;
@@ -181,12 +186,7 @@ static void test_refine(void **state)
 {
 	(void)state;
 	double R[9], t[3], X[3 * N], x1[2 * N], x2[2 * N];
-	motion(R, t);
-	scene(R, t, X, x1, x2);
-	for (int i = 0; i < N; i += 5) {
-		x2[2 * i] += 0.05 * ((i % 3) - 1) + 0.03;
-		x2[2 * i + 1] -= 0.04;
-	}
+	scene_with_outliers(R, t, X, x1, x2);
 	double w0[3] = {0.01, 0.0, 0.0}, dR0[9], Rs[9], ts[3] = {t[0] + 0.05, t[1], t[2]};
 	mvod_rot_exp(w0, dR0);
 	mvod_mat3_mul(dR0, R, Rs);
