@@ -42,6 +42,8 @@ bool mvod_pinhole_pixel(const double K[4], const double c[3], double uv[2]);
 void mvod_motion_between(const double Ra[9], const double ta[3], const double Rb[9],
 			 const double tb[3], double R[9], double t[3]);
 double mvod_vec3_norm(const double v[3]);
+/* out = a x b (out must not alias a or b) */
+void mvod_vec3_cross(const double a[3], const double b[3], double out[3]);
 double mvod_vec3_dist(const double a[3], const double b[3]);
 double mvod_mat3_det(const double A[9]);
 

@@ -214,14 +214,19 @@ void mvod_rot_log(const double R[9], double w[3])
 		w[k] = f * q[k + 1];
 }
 
+void mvod_vec3_cross(const double a[3], const double b[3], double out[3])
+{
+	out[0] = a[1] * b[2] - a[2] * b[1];
+	out[1] = a[2] * b[0] - a[0] * b[2];
+	out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
 double mvod_vec3_angle(const double a[3], const double b[3])
 {
 	double na = mvod_vec3_norm(a), nb = mvod_vec3_norm(b);
 	if (na == 0.0 || nb == 0.0)
 		return 0.0;
-	double cx = a[1] * b[2] - a[2] * b[1];
-	double cy = a[2] * b[0] - a[0] * b[2];
-	double cz = a[0] * b[1] - a[1] * b[0];
-	double cr = sqrt(cx * cx + cy * cy + cz * cz);
-	return atan2(cr, a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+	double c[3];
+	mvod_vec3_cross(a, b, c);
+	return atan2(mvod_vec3_norm(c), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
 }

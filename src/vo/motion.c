@@ -227,15 +227,11 @@ static void tangent(const double t[3], double u[3], double v[3])
 	int k = fabs(t[0]) < fabs(t[1]) ? (fabs(t[0]) < fabs(t[2]) ? 0 : 2)
 					 : (fabs(t[1]) < fabs(t[2]) ? 1 : 2);
 	e[k] = 1;
-	u[0] = t[1] * e[2] - t[2] * e[1];
-	u[1] = t[2] * e[0] - t[0] * e[2];
-	u[2] = t[0] * e[1] - t[1] * e[0];
+	mvod_vec3_cross(t, e, u);
 	double nu = mvod_vec3_norm(u);
 	for (int j = 0; j < 3; j++)
 		u[j] /= nu;
-	v[0] = t[1] * u[2] - t[2] * u[1];
-	v[1] = t[2] * u[0] - t[0] * u[2];
-	v[2] = t[0] * u[1] - t[1] * u[0];
+	mvod_vec3_cross(t, u, v);
 }
 
 /* The pose moved by p = (w, a, b): R' = exp(w) R, t' = t + a u + b v, normalised. */
