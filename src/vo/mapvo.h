@@ -120,6 +120,8 @@ int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added);
  * that is still running.
  */
 int mvod_mapping_ba(struct mvod_mapvo *mv);
+/* Whether keyframe i (0: the oldest) of a window of nk is held in bundle adjustment. */
+bool mvod_mapping_ba_held(bool free_scale, int nk, int i);
 /*
  * At the start of a frame: writes a finished bundle adjustment into the map (its keyframes and
  * points still alive) and moves the tracked pose with the newest of its keyframes. With
