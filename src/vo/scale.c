@@ -279,6 +279,14 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 	return height_m / h;
 }
 
+double mvod_scale_bounded(const double *recent, int n, double s, double cap)
+{
+	double sum = 0;
+	for (int i = 0; i < n; i++)
+		sum += recent[i];
+	return s < 0 ? fmax(s, fmin(-cap - sum, 0)) : fmin(s, fmax(cap - sum, 0));
+}
+
 bool mvod_scale_filter_metric(const struct mvod_scale_filter *f)
 {
 	return f->since >= 0;

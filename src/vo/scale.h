@@ -174,6 +174,12 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
  */
 #define MVOD_MOTION_GAIN 0.02
 void mvod_scale_filter_motion(struct mvod_scale_filter *f, const double dir[3]);
+/*
+ * Bounded gain (map mode's rescales, mapscale.c): the log rescale s cut so that, with the n
+ * recent ones (logs), the unit moves by at most cap (log) either way; 0 when they already
+ * moved it that far s's way.
+ */
+double mvod_scale_bounded(const double *recent, int n, double s, double cap);
 /* Whether any measurement was accepted yet (the output is metric). */
 bool mvod_scale_filter_metric(const struct mvod_scale_filter *f);
 /* 0-1: the last measurement's quality, decaying by MVOD_SCALE_DECAY per step without one. */

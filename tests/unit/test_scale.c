@@ -237,6 +237,29 @@ static void test_filter(void **state)
 	assert_true(mvod_scale_filter_step(&f, INFINITY, 1, &used) == 1.0 && !used);
 }
 
+/*
+ * The bounded gain (map mode's rescales): the window's logs and the new one together within
+ * the cap either way; a step back towards the other side is free up to the cap beyond it.
+ * Exact comparisons: sums and differences of a few short decimals, to rounding.
+ */
+static void test_bounded(void **state)
+{
+	(void)state;
+	const double none[4] = {0, 0, 0, 0}, up[4] = {0.02, 0, 0.02, 0}, over[4] = {0.06, 0, 0, 0};
+	/* An empty window passes a step within the cap and cuts one beyond it. */
+	assert_true(mvod_scale_bounded(none, 4, 0.03, 0.05) == 0.03);
+	assert_true(fabs(mvod_scale_bounded(none, 4, 0.08, 0.05) - 0.05) < 1e-15);
+	assert_true(fabs(mvod_scale_bounded(none, 4, -0.08, 0.05) + 0.05) < 1e-15);
+	/* 0.04 up already: 0.01 more up; down, up to 0.09. */
+	assert_true(fabs(mvod_scale_bounded(up, 4, 0.03, 0.05) - 0.01) < 1e-15);
+	assert_true(mvod_scale_bounded(up, 4, -0.03, 0.05) == -0.03);
+	assert_true(fabs(mvod_scale_bounded(up, 4, -0.2, 0.05) + 0.09) < 1e-15);
+	/* Beyond the cap already (uncapped first measurements): nothing more that way. */
+	assert_true(mvod_scale_bounded(over, 4, 0.03, 0.05) == 0);
+	/* Only the n given count. */
+	assert_true(mvod_scale_bounded(over + 1, 3, 0.03, 0.05) == 0.03);
+}
+
 /* first_n 3: held (factor 1, not metric) until 3 measurements, then their median whole. */
 static void test_filter_first_median(void **state)
 {
@@ -518,6 +541,7 @@ int main(void)
 		cmocka_unit_test(test_ground_fit_needs_ground),
 		cmocka_unit_test(test_ground_fit_lowest_plane),
 		cmocka_unit_test(test_filter),
+		cmocka_unit_test(test_bounded),
 		cmocka_unit_test(test_filter_first_median),
 		cmocka_unit_test(test_map_rescale),
 		cmocka_unit_test(test_height_metric_from_first_step),
