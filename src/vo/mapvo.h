@@ -22,6 +22,12 @@
 #include "project_match.h"
 #include "vo_internal.h"
 
+/*
+ * --scale height, map mode: after this many height measurements, the rescales of any this many
+ * keyframes in a row move the map's unit by at most MAP_RESCALE_CAP (mapscale.c).
+ */
+#define MVOD_MAPSCALE_WINDOW 20
+
 struct mvod_mapvo {
 	struct mvod_map *map;
 	struct mvod_map_params mp;
@@ -70,6 +76,15 @@ struct mvod_mapvo {
 	 * map is metric, or as metric as the chain it was built from).
 	 */
 	double unit_log;
+	/*
+	 * --scale height's bounded gain (mapscale.c): the log rescale of each of the last
+	 * MVOD_MAPSCALE_WINDOW keyframes since the first measurement (0: none), a ring written
+	 * at kf_scaled's slot, and the measurements taken. Kept across a loss: the published
+	 * unit carries on into the next map.
+	 */
+	double rescale_log[MVOD_MAPSCALE_WINDOW];
+	uint64_t kf_scaled;
+	int n_measured;
 };
 
 /*

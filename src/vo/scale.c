@@ -221,6 +221,35 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
 	return first ? ratio : exp(f->gain * r);
 }
 
+void mvod_scale_filter_motion(struct mvod_scale_filter *f, const double dir[3])
+{
+	double len = sqrt(dot3(dir, dir));
+	if (!(isfinite(len) && len > 0) || !(dir[2] > 0))
+		return;
+	double gain = fmax(1.0 / (f->motion_n + 1), MVOD_MOTION_GAIN), l = 0;
+	for (int k = 0; k < 3; k++) {
+		f->motion[k] += gain * (dir[k] / len - f->motion[k]);
+		l += f->motion[k] * f->motion[k];
+	}
+	for (int k = 0; k < 3; k++)
+		f->motion[k] /= sqrt(l);
+	f->motion_n++;
+}
+
+/* ground_n made perpendicular to the mean direction of travel, once there is one. */
+static void level_with_motion(struct mvod_scale_filter *f)
+{
+	if (f->motion_n == 0)
+		return;
+	double d = dot3(f->ground_n, f->motion), l = 0;
+	for (int k = 0; k < 3; k++) {
+		f->ground_n[k] -= d * f->motion[k];
+		l += f->ground_n[k] * f->ground_n[k];
+	}
+	for (int k = 0; k < 3; k++)
+		f->ground_n[k] /= sqrt(l);
+}
+
 double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int n,
 			       double height_m, double *scratch, double *q)
 {
@@ -240,6 +269,7 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 		learn_normal(f->ground_n, &g, fmax(gain, MVOD_GROUND_NORMAL_GAIN));
 		f->normal_fits++;
 	}
+	level_with_motion(f);
 	/* A tilted fit still measures: along the expected normal its tilt costs nothing. */
 	double h = dot3(f->ground_n, g.c);
 	if (!(h > 0))
@@ -247,6 +277,14 @@ double mvod_scale_height_ratio(struct mvod_scale_filter *f, const double *X, int
 	/* Saturates: 20 inliers give 0.5, 80 give 0.8. */
 	*q = g.inliers / (g.inliers + 20.0);
 	return height_m / h;
+}
+
+double mvod_scale_bounded(const double *recent, int n, double s, double cap)
+{
+	double sum = 0;
+	for (int i = 0; i < n; i++)
+		sum += recent[i];
+	return s < 0 ? fmax(s, fmin(-cap - sum, 0)) : fmin(s, fmax(cap - sum, 0));
 }
 
 bool mvod_scale_filter_metric(const struct mvod_scale_filter *f)
