@@ -23,19 +23,22 @@ static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
 
 /*
  * Whether the window's keyframe i of nk is held: the gauge, position, orientation and scale.
- * The two oldest, but in a map's first window (its two keyframes) with free scale only the
- * oldest. The second keyframe's pose there is the two-view step's (essential matrix, length
- * from the old map or the last speed), never refined against the map's points: held, its
- * rotation and direction stay as the step left them for the whole map. Freed, they are
- * refined; its distance (the map's unit, which two keyframes alone do not observe) moves by
- * what Levenberg-Marquardt's steps leave in that direction, 0.1-1.2 % on KITTI 07. Free scale
- * only: with --scale gt the step lengths come from the truth and with --scale height the map
- * is rescaled at its keyframes, and freeing it there cost KITTI 07 map klt height scale drift
- * 1.119 -> 1.168 and map orb height direction 3.88 -> 4.72 deg (BENCHMARKS.md).
+ * The oldest mv->n_held (never the newest), but in a map's first window (its two keyframes)
+ * with free scale only the oldest. The second keyframe's pose there is the two-view step's
+ * (essential matrix, length from the old map or the last speed), never refined against the
+ * map's points: held, its rotation and direction stay as the step left them for the whole map.
+ * Freed, they are refined; its distance (the map's unit, which two keyframes alone do not
+ * observe) moves by what Levenberg-Marquardt's steps leave in that direction, 0.1-1.2 % on
+ * KITTI 07. Free scale only: with --scale gt the step lengths come from the truth and with
+ * --scale height the map is rescaled at its keyframes, and freeing it there cost KITTI 07 map
+ * klt height scale drift 1.119 -> 1.168 and map orb height direction 3.88 -> 4.72 deg
+ * (BENCHMARKS.md).
  */
 static bool held(const struct mvod_mapvo *mv, int nk, int i)
 {
-	return i == 0 || (i == 1 && (nk > 2 || !mv->free_scale));
+	if (nk == 2)
+		return i == 0 || (i == 1 && !mv->free_scale);
+	return i < mv->n_held && i < nk - 1;
 }
 
 /* The window into j: poses of the nk keyframes, points seen twice or more, observations. */
