@@ -22,20 +22,23 @@ static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
 }
 
 /*
- * The gauge (mapvo.h): the two oldest keyframes held, but in a map's first window (its two
- * keyframes) with free scale only the oldest. The second keyframe's pose there is the two-view
- * step's (essential matrix, length from the old map or the last speed), never refined against
- * the map's points: held, its rotation and direction stay as the step left them for the whole
- * map. Freed, they are refined; its distance (the map's unit, which two keyframes alone do not
- * observe) moves by what Levenberg-Marquardt's steps leave in that direction, 0.1-1.2 % on
- * KITTI 07. Free scale only: with --scale gt the step lengths come from the truth and with
- * --scale height the map is rescaled at its keyframes, and freeing it there cost KITTI 07 map
- * klt height scale drift 1.119 -> 1.168 and map orb height direction 3.88 -> 4.72 deg
- * (BENCHMARKS.md). Freeing it with free scale: mvod-synth's KITTI 00 t_rel 5.95 -> 4.49 %.
+ * The gauge (mapvo.h): the oldest n_held keyframes held (never the newest), but in a map's
+ * first window (its two keyframes) with free scale only the oldest. The second keyframe's pose
+ * there is the two-view step's (essential matrix, length from the old map or the last speed),
+ * never refined against the map's points: held, its rotation and direction stay as the step
+ * left them for the whole map. Freed, they are refined; its distance (the map's unit, which two
+ * keyframes alone do not observe) moves by what Levenberg-Marquardt's steps leave in that
+ * direction, 0.1-1.2 % on KITTI 07. Free scale only: with --scale gt the step lengths come from
+ * the truth and with --scale height the map is rescaled at its keyframes, and freeing it there
+ * cost KITTI 07 map klt height scale drift 1.119 -> 1.168 and map orb height direction 3.88 ->
+ * 4.72 deg (BENCHMARKS.md). Freeing it with free scale: mvod-synth's KITTI 00 t_rel 5.95 ->
+ * 4.49 %. How many are held (n_held: 3 with KLT, 2 with descriptors): mapvo.c.
  */
-bool mvod_mapping_ba_held(bool free_scale, int nk, int i)
+bool mvod_mapping_ba_held(bool free_scale, int n_held, int nk, int i)
 {
-	return i == 0 || (i == 1 && (nk > 2 || !free_scale));
+	if (nk == 2)
+		return i == 0 || (i == 1 && !free_scale);
+	return i < n_held && i < nk - 1;
 }
 
 /* The window into j: poses of the nk keyframes, points seen twice or more, observations. */
@@ -45,7 +48,7 @@ static void snapshot(struct mvod_mapvo *mv, int nk, struct mvod_ba_job *j)
 		const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, mv->kfs[i]);
 		mvod_rot_log(k->Rcw, j->poses + 6 * i);
 		memcpy(j->poses + 6 * i + 3, k->tcw, sizeof(k->tcw));
-		j->fixed[i] = mvod_mapping_ba_held(mv->free_scale, nk, i);
+		j->fixed[i] = mvod_mapping_ba_held(mv->free_scale, mv->n_held, nk, i);
 		j->kf[i] = mv->kfs[i];
 	}
 	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), nb = 0, no = 0;

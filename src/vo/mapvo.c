@@ -18,6 +18,24 @@
  * them all, so it makes no keyframes (and triangulates nothing from a zero baseline).
  */
 #define KF_SHARE 0.9
+/*
+ * Keyframes bundle adjustment holds at the old end of the window (the gauge: mapping_ba.c).
+ * Two fix position, orientation and scale; the scale one window hands to the next is then
+ * the distance between its two oldest keyframes, as the windows before estimated it. KLT
+ * makes a keyframe every frame on KITTI (about 1 m apart), so that unit is one frame's step
+ * and its error a random walk over the whole run: on mvod-synth's KITTI 00 drive (free scale)
+ * 100-frame windows' path ratio went 0.80 ... 1.12 ... 0.91 ... 1.15. Holding three (four
+ * free of seven) hands on a 2-frame baseline that the points seen from all three agree on:
+ * t_rel 4.49 / 5.85 / 5.31 % -> 3.12 / 4.67 / 4.13 % with --tracks 500 / 480 / 520, KITTI 06
+ * and 07 map klt height drift 1.035 -> 1.008 and 1.119 -> 1.100. ORB's keyframes are sparser
+ * (a window spans more motion) and three cost it (07 map orb auto Sim(3) ATE 0.515 -> 1.413 m,
+ * 06 map orb gt direction 1.29 -> 1.53 deg): two. Four of seven gave 2.89 / 3.43 / 3.39 %
+ * but KITTI 07 map klt free-scale drift 1.148 -> 1.202 and height 1.119 -> 1.191; a window
+ * of 10 holding 5, 3.57 / 3.15 / 5.75 %; 12 holding 6, 8.81 % at 500 tracks; 10 holding 2,
+ * 6.95 %.
+ */
+#define KLT_HELD 3
+#define HELD 2
 /* Chi-square gate (2 dof, 95 %) on a reprojection error in sigma units, as the shims use. */
 double mvod_mapvo_sigma(int octave)
 {
@@ -86,6 +104,7 @@ int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)
 	mv->cap = vo->cap;
 	mv->ba_sync = vo->p.ba_sync;
 	mv->free_scale = vo->p.scale_mode == MVOD_SCALE_MODE_AUTO;
+	mv->n_held = vo->klt ? KLT_HELD : HELD;
 	mvod_map_params_default(&mv->mp);
 	mv->mp.kp_cap = vo->cap;
 	mv->K[0] = vo->cam.fx, mv->K[1] = vo->cam.fy, mv->K[2] = vo->cam.cx, mv->K[3] = vo->cam.cy;

@@ -37,6 +37,7 @@ struct mvod_mapvo {
 	struct mvod_ba_thread *bat;
 	bool ba_sync; /* each result is waited for at the frame after its keyframe */
 	bool free_scale; /* --scale auto: nothing but bundle adjustment's gauge holds the unit */
+	int n_held; /* keyframes bundle adjustment holds at the old end of the window (the gauge) */
 	int cap;            /* keypoints per frame (the VO's cap) */
 	double K[4];        /* fx, fy, cx, cy of the preprocessed image */
 	/* The current frame, in the map's form: keypoints, and the point each one tracks. */
@@ -129,14 +130,17 @@ int mvod_mapvo_init(struct mvod_vo *vo, struct mvod_vo_result *res);
  */
 int mvod_mapping_keyframe(struct mvod_vo *vo, bool *added);
 /*
- * Windowed bundle adjustment (mapping_ba.c), the two oldest keyframes held (the gauge:
+ * Windowed bundle adjustment (mapping_ba.c), the oldest n_held keyframes held (the gauge:
  * position and scale; with free scale, only the oldest in a map's first window): posts the
  * window to the BA thread, after waiting for the last keyframe's solve and landing it when
  * that is still running.
  */
 int mvod_mapping_ba(struct mvod_mapvo *mv);
-/* Whether keyframe i (0: the oldest) of a window of nk is held in bundle adjustment. */
-bool mvod_mapping_ba_held(bool free_scale, int nk, int i);
+/*
+ * Whether keyframe i (0: the oldest) of a window of nk is held in bundle adjustment, for a map
+ * that holds n_held at the window's old end.
+ */
+bool mvod_mapping_ba_held(bool free_scale, int n_held, int nk, int i);
 /*
  * At the start of a frame: writes a finished bundle adjustment into the map (its keyframes and
  * points still alive) and moves the tracked pose with the newest of its keyframes. With
