@@ -1,0 +1,212 @@
+#include "posefit.h"
+
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "mvod/geom.h"
+
+/* The pose moved by d = (w, tau) on the left: R' = exp(w) R, t' = exp(w) t + tau. */
+static void perturb(const double R[9], const double t[3], const double d[6], double Ro[9],
+		    double to[3])
+{
+	double dR[9];
+	mvod_rot_exp(d, dR);
+	mvod_mat3_mul(dR, R, Ro);
+	mvod_mat3_vec(dR, t, to);
+	for (int k = 0; k < 3; k++)
+		to[k] += d[3 + k];
+}
+
+/* Sampson distance of x1 -> x2 under E = [t]x R (normalised units), signed. */
+static double sampson(const double R[9], const double t[3], const double x1[2], const double x2[2])
+{
+	const double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+	double E[9];
+	mvod_mat3_mul(tx, R, E);
+	double a[3] = {E[0] * x1[0] + E[1] * x1[1] + E[2], E[3] * x1[0] + E[4] * x1[1] + E[5],
+		       E[6] * x1[0] + E[7] * x1[1] + E[8]};
+	double b0 = E[0] * x2[0] + E[3] * x2[1] + E[6], b1 = E[1] * x2[0] + E[4] * x2[1] + E[7];
+	double num = x2[0] * a[0] + x2[1] * a[1] + a[2];
+	double den = a[0] * a[0] + a[1] * a[1] + b0 * b0 + b1 * b1;
+	return den > 1e-30 ? num / sqrt(den) : 0.0;
+}
+
+/* The step from the previous frame to the current R, t: Rr = R Rp^T, tr = t - Rr tp. */
+static void relative(const struct mvod_posefit *p, const double R[9], const double t[3],
+		     double Rr[9], double tr[3])
+{
+	mvod_motion_between(p->Rp, p->tp, R, t, Rr, tr);
+}
+
+static double huber_w(double r, double k)
+{
+	return r <= k ? 1.0 : k / r;
+}
+
+static double huber_c(double r, double k)
+{
+	return r <= k ? 0.5 * r * r : k * (r - 0.5 * k);
+}
+
+/* Map point i's reprojection residual (pixels) and its Jacobian (2 x 6) at R, t; false behind. */
+static bool reproject(const struct mvod_posefit *p, const double R[9], const double t[3], int i,
+		      double r[2], double J[12])
+{
+	double c[3];
+	mvod_rigid_apply(R, t, p->X + 3 * i, c);
+	if (!(c[2] > 1e-9))
+		return false;
+	double iz = 1.0 / c[2], fx = p->K[0], fy = p->K[1];
+	r[0] = fx * c[0] * iz + p->K[2] - p->uv[2 * i];
+	r[1] = fy * c[1] * iz + p->K[3] - p->uv[2 * i + 1];
+	if (!J)
+		return true;
+	/* d(uv)/dc, then dc/d(w, tau) = [-[c]x | I]. */
+	double du[3] = {fx * iz, 0, -fx * c[0] * iz * iz}, dv[3] = {0, fy * iz, -fy * c[1] * iz * iz};
+	const double dc[9] = {0, c[2], -c[1], -c[2], 0, c[0], c[1], -c[0], 0};
+	for (int q = 0; q < 3; q++) {
+		J[q] = du[0] * dc[q] + du[1] * dc[3 + q] + du[2] * dc[6 + q];
+		J[6 + q] = dv[0] * dc[q] + dv[1] * dc[3 + q] + dv[2] * dc[6 + q];
+		J[3 + q] = du[q];
+		J[9 + q] = dv[q];
+	}
+	return true;
+}
+
+/* Robust cost of the whole problem at R, t. */
+static double cost(const struct mvod_posefit *p, const double R[9], const double t[3])
+{
+	double c = 0, r[2], Rr[9], tr[3], f = 0.5 * (p->K[0] + p->K[1]);
+	for (int i = 0; i < p->n_pts; i++)
+		if (p->use[i] && reproject(p, R, t, i, r, NULL))
+			c += huber_c(hypot(r[0], r[1]), p->huber_px);
+	relative(p, R, t, Rr, tr);
+	for (int i = 0; i < p->n_epi; i++)
+		if (p->epi_use[i])
+			c += p->epi_weight *
+			     huber_c(fabs(f * sampson(Rr, tr, p->x1 + 2 * i, p->x2 + 2 * i)), p->huber_px);
+	return c;
+}
+
+/* Adds w J^T J and w J^T r of one residual row to A (6 x 6) and g. */
+static void accumulate(const double J[6], double r, double w, double A[36], double g[6])
+{
+	for (int a = 0; a < 6; a++) {
+		g[a] += w * J[a] * r;
+		for (int b = 0; b < 6; b++)
+			A[6 * a + b] += w * J[a] * J[b];
+	}
+}
+
+/* The map points' normal equations at R, t. */
+static void points_normal(const struct mvod_posefit *p, const double R[9], const double t[3],
+			  double A[36], double g[6])
+{
+	double r[2], J[12];
+	for (int i = 0; i < p->n_pts; i++) {
+		if (!p->use[i] || !reproject(p, R, t, i, r, J))
+			continue;
+		double w = huber_w(hypot(r[0], r[1]), p->huber_px);
+		accumulate(J, r[0], w, A, g);
+		accumulate(J + 6, r[1], w, A, g);
+	}
+}
+
+/* The epipolar tracks' normal equations at R, t (forward differences, 1e-7). */
+static void epi_normal(const struct mvod_posefit *p, const double R[9], const double t[3],
+		       double A[36], double g[6])
+{
+	const double h = 1e-7;
+	double f = 0.5 * (p->K[0] + p->K[1]), Rr[9], tr[3], Rq[6][9], tq[6][3];
+	relative(p, R, t, Rr, tr);
+	for (int q = 0; q < 6; q++) {
+		double d[6] = {0};
+		d[q] = h;
+		perturb(Rr, tr, d, Rq[q], tq[q]); /* the step moves as the pose does */
+	}
+	for (int i = 0; i < p->n_epi; i++) {
+		if (!p->epi_use[i])
+			continue;
+		const double *x1 = p->x1 + 2 * i, *x2 = p->x2 + 2 * i;
+		double r = f * sampson(Rr, tr, x1, x2), J[6];
+		for (int q = 0; q < 6; q++)
+			J[q] = (f * sampson(Rq[q], tq[q], x1, x2) - r) / h;
+		accumulate(J, r, p->epi_weight * huber_w(fabs(r), p->huber_px), A, g);
+	}
+}
+
+/* Solves the 6 x 6 system A x = b in place (Gaussian elimination, partial pivoting). */
+static bool solve6(double A[36], double b[6])
+{
+	for (int c = 0; c < 6; c++) {
+		int piv = c;
+		for (int r = c + 1; r < 6; r++)
+			if (fabs(A[6 * r + c]) > fabs(A[6 * piv + c]))
+				piv = r;
+		if (!(fabs(A[6 * piv + c]) > 1e-300))
+			return false;
+		for (int q = 0; q < 6; q++) {
+			double s = A[6 * c + q];
+			A[6 * c + q] = A[6 * piv + q];
+			A[6 * piv + q] = s;
+		}
+		double s = b[c];
+		b[c] = b[piv];
+		b[piv] = s;
+		for (int r = c + 1; r < 6; r++) {
+			double k = A[6 * r + c] / A[6 * c + c];
+			for (int q = c; q < 6; q++)
+				A[6 * r + q] -= k * A[6 * c + q];
+			b[r] -= k * b[c];
+		}
+	}
+	for (int c = 5; c >= 0; c--) {
+		for (int q = c + 1; q < 6; q++)
+			b[c] -= A[6 * c + q] * b[q];
+		b[c] /= A[6 * c + c];
+	}
+	return true;
+}
+
+/* The tracks within the gate at the start pose. */
+static int select_epi(struct mvod_posefit *p, const double R[9], const double t[3])
+{
+	double Rr[9], tr[3], f = 0.5 * (p->K[0] + p->K[1]);
+	relative(p, R, t, Rr, tr);
+	int k = 0;
+	for (int i = 0; i < p->n_epi; i++) {
+		double r = fabs(f * sampson(Rr, tr, p->x1 + 2 * i, p->x2 + 2 * i));
+		p->epi_use[i] = mvod_vec3_norm(tr) > 0 && r <= p->epi_gate_px;
+		k += p->epi_use[i];
+	}
+	return k;
+}
+
+int mvod_posefit_refine(struct mvod_posefit *p, double R[9], double t[3])
+{
+	int used = select_epi(p, R, t);
+	double c0 = cost(p, R, t), lambda = 1e-4;
+	for (int it = 0; it < p->iterations; it++) {
+		double A[36] = {0}, g[6] = {0}, Rn[9], tn[3];
+		points_normal(p, R, t, A, g);
+		epi_normal(p, R, t, A, g);
+		for (int q = 0; q < 6; q++) {
+			A[7 * q] *= 1 + lambda;
+			g[q] = -g[q];
+		}
+		if (!solve6(A, g))
+			return -EINVAL;
+		perturb(R, t, g, Rn, tn);
+		double c1 = cost(p, Rn, tn);
+		if (!(c1 < c0)) {
+			lambda *= 10;
+			continue;
+		}
+		memcpy(R, Rn, 9 * sizeof(double));
+		memcpy(t, tn, 3 * sizeof(double));
+		c0 = c1;
+		lambda *= 0.1;
+	}
+	return used;
+}
