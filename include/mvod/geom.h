@@ -44,6 +44,11 @@ void mvod_motion_between(const double Ra[9], const double ta[3], const double Rb
 double mvod_vec3_norm(const double v[3]);
 /* out = a x b (out must not alias a or b) */
 void mvod_vec3_cross(const double a[3], const double b[3], double out[3]);
+/*
+ * Solves the n x n system A x = b in place (row-major A, Gaussian elimination with partial
+ * pivoting): x in b, A destroyed. false when A is singular (a pivot of magnitude <= 1e-300).
+ */
+bool mvod_linsolve(double *A, double *b, int n);
 double mvod_vec3_dist(const double a[3], const double b[3]);
 double mvod_mat3_det(const double A[9]);
 

@@ -230,3 +230,35 @@ double mvod_vec3_angle(const double a[3], const double b[3])
 	mvod_vec3_cross(a, b, c);
 	return atan2(mvod_vec3_norm(c), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
 }
+
+bool mvod_linsolve(double *A, double *b, int n)
+{
+	for (int c = 0; c < n; c++) {
+		int piv = c;
+		for (int r = c + 1; r < n; r++)
+			if (fabs(A[n * r + c]) > fabs(A[n * piv + c]))
+				piv = r;
+		if (!(fabs(A[n * piv + c]) > 1e-300))
+			return false;
+		for (int q = 0; q < n; q++) {
+			double s = A[n * c + q];
+			A[n * c + q] = A[n * piv + q];
+			A[n * piv + q] = s;
+		}
+		double s = b[c];
+		b[c] = b[piv];
+		b[piv] = s;
+		for (int r = c + 1; r < n; r++) {
+			double f = A[n * r + c] / A[n * c + c];
+			for (int q = c; q < n; q++)
+				A[n * r + q] -= f * A[n * c + q];
+			b[r] -= f * b[c];
+		}
+	}
+	for (int c = n - 1; c >= 0; c--) {
+		for (int q = c + 1; q < n; q++)
+			b[c] -= A[n * c + q] * b[q];
+		b[c] /= A[n * c + c];
+	}
+	return true;
+}

@@ -270,38 +270,6 @@ static double huber_cost(const double R[9], const double t[3], const double *x1,
 	return c;
 }
 
-/* Solves the 5 x 5 system A x = b in place (Gaussian elimination, partial pivoting). */
-static bool solve5(double A[25], double b[5])
-{
-	for (int c = 0; c < 5; c++) {
-		int piv = c;
-		for (int r = c + 1; r < 5; r++)
-			if (fabs(A[5 * r + c]) > fabs(A[5 * piv + c]))
-				piv = r;
-		if (!(fabs(A[5 * piv + c]) > 1e-300))
-			return false;
-		for (int q = 0; q < 5; q++) {
-			double s = A[5 * c + q];
-			A[5 * c + q] = A[5 * piv + q];
-			A[5 * piv + q] = s;
-		}
-		double s = b[c];
-		b[c] = b[piv];
-		b[piv] = s;
-		for (int r = c + 1; r < 5; r++) {
-			double f = A[5 * r + c] / A[5 * c + c];
-			for (int q = c; q < 5; q++)
-				A[5 * r + q] -= f * A[5 * c + q];
-			b[r] -= f * b[c];
-		}
-	}
-	for (int c = 4; c >= 0; c--) {
-		for (int q = c + 1; q < 5; q++)
-			b[c] -= A[5 * c + q] * b[q];
-		b[c] /= A[5 * c + c];
-	}
-	return true;
-}
 
 /* Gauss-Newton's normal equations at (R, t) along the 5 parameters of perturb(). */
 static void normal_equations(const double R[9], const double t[3], const double u[3],
@@ -358,7 +326,7 @@ int mvod_motion_refine(double R[9], double t[3], const double *x1, const double 
 				M[6 * a] += lambda * A[6 * a];
 				x[a] = -g[a];
 			}
-			if (!solve5(M, x))
+			if (!mvod_linsolve(M, x, 5))
 				return steps;
 			perturb(R, t, u, v, x, Rn, tn);
 			double cn = huber_cost(Rn, tn, x1, x2, w, mask, n, k);

@@ -136,38 +136,6 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 	}
 }
 
-/* Solves the 6 x 6 system A x = b in place (Gaussian elimination, partial pivoting). */
-static bool solve6(double A[36], double b[6])
-{
-	for (int c = 0; c < 6; c++) {
-		int piv = c;
-		for (int r = c + 1; r < 6; r++)
-			if (fabs(A[6 * r + c]) > fabs(A[6 * piv + c]))
-				piv = r;
-		if (!(fabs(A[6 * piv + c]) > 1e-300))
-			return false;
-		for (int q = 0; q < 6; q++) {
-			double s = A[6 * c + q];
-			A[6 * c + q] = A[6 * piv + q];
-			A[6 * piv + q] = s;
-		}
-		double s = b[c];
-		b[c] = b[piv];
-		b[piv] = s;
-		for (int r = c + 1; r < 6; r++) {
-			double k = A[6 * r + c] / A[6 * c + c];
-			for (int q = c; q < 6; q++)
-				A[6 * r + q] -= k * A[6 * c + q];
-			b[r] -= k * b[c];
-		}
-	}
-	for (int c = 5; c >= 0; c--) {
-		for (int q = c + 1; q < 6; q++)
-			b[c] -= A[6 * c + q] * b[q];
-		b[c] /= A[6 * c + c];
-	}
-	return true;
-}
 
 /* The tracks within the gate at the start pose. */
 static int select_epi(struct mvod_posefit *p, const double R[9], const double t[3])
@@ -195,7 +163,7 @@ int mvod_posefit_refine(struct mvod_posefit *p, double R[9], double t[3])
 			A[7 * q] *= 1 + lambda;
 			g[q] = -g[q];
 		}
-		if (!solve6(A, g))
+		if (!mvod_linsolve(A, g, 6))
 			return -EINVAL;
 		perturb(R, t, g, Rn, tn);
 		double c1 = cost(p, Rn, tn);

@@ -111,9 +111,26 @@ static void test_vec_angle(void **state)
 	assert_true(mvod_vec3_angle(a, z) == 0.0);
 }
 
+/* A system with a known solution (one row swap needed: A[0][0] = 0), and a singular one. */
+static void test_linsolve(void **state)
+{
+	(void)state;
+	double A[9] = {0, 2, 1, 1, 1, 1, 2, 1, 3}, x[3] = {1, 2, 3};
+	double b[3] = {0, 0, 0};
+	for (int r = 0; r < 3; r++)
+		for (int c = 0; c < 3; c++)
+			b[r] += A[3 * r + c] * x[c];
+	assert_true(mvod_linsolve(A, b, 3));
+	for (int i = 0; i < 3; i++) /* integers through a few divisions: 1e-12 is rounding */
+		assert_true(fabs(b[i] - x[i]) < 1e-12);
+	double S[4] = {1, 2, 2, 4}, y[2] = {1, 1};
+	assert_false(mvod_linsolve(S, y, 2));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_linsolve),
 		cmocka_unit_test(test_quat_round_trip),
 		cmocka_unit_test(test_quat_known_value),
 		cmocka_unit_test(test_pose_inverse_compose),
