@@ -202,8 +202,7 @@ int mvod_motion_rotation_ransac(const double *x1, const double *x2, int n, doubl
 	return best >= 2 ? rotation_inliers(x1, x2, n, R, thresh, mask, 0) : 0;
 }
 
-/* Sampson distance of x1 -> x2 under E (normalised units), signed. */
-static double sampson(const double E[9], const double x1[2], const double x2[2])
+double mvod_motion_sampson(const double E[9], const double x1[2], const double x2[2])
 {
 	double a[3] = {E[0] * x1[0] + E[1] * x1[1] + E[2], E[3] * x1[0] + E[4] * x1[1] + E[5],
 		       E[6] * x1[0] + E[7] * x1[1] + E[8]};
@@ -213,8 +212,7 @@ static double sampson(const double E[9], const double x1[2], const double x2[2])
 	return den > 1e-30 ? num / sqrt(den) : 0.0;
 }
 
-/* E = [t]x R. */
-static void essential(const double R[9], const double t[3], double E[9])
+void mvod_motion_essential(const double R[9], const double t[3], double E[9])
 {
 	const double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
 	mvod_mat3_mul(tx, R, E);
@@ -252,7 +250,7 @@ static void perturb(const double R[9], const double t[3], const double u[3], con
 static double weighted(const double E[9], const double *x1, const double *x2, const double *w,
 		       int i)
 {
-	return sampson(E, x1 + 2 * i, x2 + 2 * i) * (w ? w[i] : 1.0);
+	return mvod_motion_sampson(E, x1 + 2 * i, x2 + 2 * i) * (w ? w[i] : 1.0);
 }
 
 /* Huber's cost at k of the weighted Sampson residuals of the points with mask set. */
@@ -260,7 +258,7 @@ static double huber_cost(const double R[9], const double t[3], const double *x1,
 			 const double *w, const uint8_t *mask, int n, double k)
 {
 	double E[9], c = 0;
-	essential(R, t, E);
+	mvod_motion_essential(R, t, E);
 	for (int i = 0; i < n; i++) {
 		if (!mask[i])
 			continue;
@@ -279,12 +277,12 @@ static void normal_equations(const double R[9], const double t[3], const double 
 	/* Forward differences: the residuals are smooth, and 1e-7 rad keeps 8-9 digits. */
 	const double h = 1e-7;
 	double E[9], Ep[5][9];
-	essential(R, t, E);
+	mvod_motion_essential(R, t, E);
 	for (int p = 0; p < 5; p++) {
 		double d[5] = {0}, Rp[9], tp[3];
 		d[p] = h;
 		perturb(R, t, u, v, d, Rp, tp);
-		essential(Rp, tp, Ep[p]);
+		mvod_motion_essential(Rp, tp, Ep[p]);
 	}
 	memset(A, 0, 25 * sizeof(double));
 	memset(g, 0, 5 * sizeof(double));
@@ -353,7 +351,7 @@ int mvod_motion_epipolar_inliers(const double R[9], const double t[3], const dou
 {
 	double E[9];
 	int count = 0;
-	essential(R, t, E);
+	mvod_motion_essential(R, t, E);
 	for (int i = 0; i < n; i++) {
 		mask[i] = fabs(weighted(E, x1, x2, w, i)) < thresh;
 		count += mask[i];

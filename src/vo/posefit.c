@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "mvod/geom.h"
+#include "motion.h"
 
 /* The pose moved by d = (w, tau) on the left: R' = exp(w) R, t' = exp(w) t + tau. */
 static void perturb(const double R[9], const double t[3], const double d[6], double Ro[9],
@@ -18,25 +19,18 @@ static void perturb(const double R[9], const double t[3], const double d[6], dou
 		to[k] += d[3 + k];
 }
 
-/* Sampson distance of x1 -> x2 under E = [t]x R (normalised units), signed. */
-static double sampson(const double R[9], const double t[3], const double x1[2], const double x2[2])
-{
-	const double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
-	double E[9];
-	mvod_mat3_mul(tx, R, E);
-	double a[3] = {E[0] * x1[0] + E[1] * x1[1] + E[2], E[3] * x1[0] + E[4] * x1[1] + E[5],
-		       E[6] * x1[0] + E[7] * x1[1] + E[8]};
-	double b0 = E[0] * x2[0] + E[3] * x2[1] + E[6], b1 = E[1] * x2[0] + E[4] * x2[1] + E[7];
-	double num = x2[0] * a[0] + x2[1] * a[1] + a[2];
-	double den = a[0] * a[0] + a[1] * a[1] + b0 * b0 + b1 * b1;
-	return den > 1e-30 ? num / sqrt(den) : 0.0;
-}
-
-/* The step from the previous frame to the current R, t: Rr = R Rp^T, tr = t - Rr tp. */
+/*
+ * The step from the previous frame to the current R, t (Rr = R Rp^T, tr = t - Rr tp) and its
+ * essential matrix E; tr's length through *len (may be NULL).
+ */
 static void relative(const struct mvod_posefit *p, const double R[9], const double t[3],
-		     double Rr[9], double tr[3])
+		     double E[9], double *len)
 {
+	double Rr[9], tr[3];
 	mvod_motion_between(p->Rp, p->tp, R, t, Rr, tr);
+	mvod_motion_essential(Rr, tr, E);
+	if (len)
+		*len = mvod_vec3_norm(tr);
 }
 
 static double huber_w(double r, double k)
@@ -77,15 +71,16 @@ static bool reproject(const struct mvod_posefit *p, const double R[9], const dou
 /* Robust cost of the whole problem at R, t. */
 static double cost(const struct mvod_posefit *p, const double R[9], const double t[3])
 {
-	double c = 0, r[2], Rr[9], tr[3], f = 0.5 * (p->K[0] + p->K[1]);
+	double c = 0, r[2], E[9], f = 0.5 * (p->K[0] + p->K[1]);
 	for (int i = 0; i < p->n_pts; i++)
 		if (p->use[i] && reproject(p, R, t, i, r, NULL))
 			c += huber_c(hypot(r[0], r[1]), p->huber_px);
-	relative(p, R, t, Rr, tr);
+	relative(p, R, t, E, NULL);
 	for (int i = 0; i < p->n_epi; i++)
 		if (p->epi_use[i])
 			c += p->epi_weight *
-			     huber_c(fabs(f * sampson(Rr, tr, p->x1 + 2 * i, p->x2 + 2 * i)), p->huber_px);
+			     huber_c(fabs(f * mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i)),
+				     p->huber_px);
 	return c;
 }
 
@@ -118,20 +113,22 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 		       double A[36], double g[6])
 {
 	const double h = 1e-7;
-	double f = 0.5 * (p->K[0] + p->K[1]), Rr[9], tr[3], Rq[6][9], tq[6][3];
-	relative(p, R, t, Rr, tr);
-	for (int q = 0; q < 6; q++) {
-		double d[6] = {0};
+	double f = 0.5 * (p->K[0] + p->K[1]), Rr[9], tr[3], E[9], Eq[6][9];
+	mvod_motion_between(p->Rp, p->tp, R, t, Rr, tr);
+	mvod_motion_essential(Rr, tr, E);
+	for (int q = 0; q < 6; q++) { /* the step moves as the pose does */
+		double d[6] = {0}, Rq[9], tq[3];
 		d[q] = h;
-		perturb(Rr, tr, d, Rq[q], tq[q]); /* the step moves as the pose does */
+		perturb(Rr, tr, d, Rq, tq);
+		mvod_motion_essential(Rq, tq, Eq[q]);
 	}
 	for (int i = 0; i < p->n_epi; i++) {
 		if (!p->epi_use[i])
 			continue;
 		const double *x1 = p->x1 + 2 * i, *x2 = p->x2 + 2 * i;
-		double r = f * sampson(Rr, tr, x1, x2), J[6];
+		double r = f * mvod_motion_sampson(E, x1, x2), J[6];
 		for (int q = 0; q < 6; q++)
-			J[q] = (f * sampson(Rq[q], tq[q], x1, x2) - r) / h;
+			J[q] = (f * mvod_motion_sampson(Eq[q], x1, x2) - r) / h;
 		accumulate(J, r, p->epi_weight * huber_w(fabs(r), p->huber_px), A, g);
 	}
 }
@@ -140,12 +137,12 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 /* The tracks within the gate at the start pose. */
 static int select_epi(struct mvod_posefit *p, const double R[9], const double t[3])
 {
-	double Rr[9], tr[3], f = 0.5 * (p->K[0] + p->K[1]);
-	relative(p, R, t, Rr, tr);
+	double E[9], len, f = 0.5 * (p->K[0] + p->K[1]);
+	relative(p, R, t, E, &len);
 	int k = 0;
 	for (int i = 0; i < p->n_epi; i++) {
-		double r = fabs(f * sampson(Rr, tr, p->x1 + 2 * i, p->x2 + 2 * i));
-		p->epi_use[i] = mvod_vec3_norm(tr) > 0 && r <= p->epi_gate_px;
+		double r = fabs(f * mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i));
+		p->epi_use[i] = len > 0 && r <= p->epi_gate_px;
 		k += p->epi_use[i];
 	}
 	return k;
