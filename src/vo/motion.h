@@ -22,15 +22,15 @@
  */
 #define MVOD_MOTION_SCALE_DEPTH 50.0
 
-/*
- * Depths of one correspondence along its two rays: d1 in camera 1, d2 in camera 2, from the
- * midpoint of the closest approach of the rays. False when the rays are parallel.
- */
 /* E = [t]x R: the essential matrix of the motion X2 = R X1 + t. */
 void mvod_motion_essential(const double R[9], const double t[3], double E[9]);
 /* Sampson distance of x1 -> x2 under E (normalised units), signed; 0 when degenerate. */
 double mvod_motion_sampson(const double E[9], const double x1[2], const double x2[2]);
 
+/*
+ * Depths of one correspondence along its two rays: d1 in camera 1, d2 in camera 2, from the
+ * midpoint of the closest approach of the rays. False when the rays are parallel.
+ */
 bool mvod_triangulate_midpoint(const double R[9], const double t[3], const double x1[2],
 			       const double x2[2], double *d1, double *d2);
 

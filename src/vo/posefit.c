@@ -19,18 +19,12 @@ static void perturb(const double R[9], const double t[3], const double d[6], dou
 		to[k] += d[3 + k];
 }
 
-/*
- * The step from the previous frame to the current R, t (Rr = R Rp^T, tr = t - Rr tp) and its
- * essential matrix E; tr's length through *len (may be NULL).
- */
+/* The step from the previous frame to the current R, t (Rr = R Rp^T, tr = t - Rr tp), its E. */
 static void relative(const struct mvod_posefit *p, const double R[9], const double t[3],
-		     double E[9], double *len)
+		     double Rr[9], double tr[3], double E[9])
 {
-	double Rr[9], tr[3];
 	mvod_motion_between(p->Rp, p->tp, R, t, Rr, tr);
 	mvod_motion_essential(Rr, tr, E);
-	if (len)
-		*len = mvod_vec3_norm(tr);
 }
 
 static double huber_w(double r, double k)
@@ -71,11 +65,11 @@ static bool reproject(const struct mvod_posefit *p, const double R[9], const dou
 /* Robust cost of the whole problem at R, t. */
 static double cost(const struct mvod_posefit *p, const double R[9], const double t[3])
 {
-	double c = 0, r[2], E[9], f = 0.5 * (p->K[0] + p->K[1]);
+	double c = 0, r[2], Rr[9], tr[3], E[9], f = 0.5 * (p->K[0] + p->K[1]);
 	for (int i = 0; i < p->n_pts; i++)
 		if (p->use[i] && reproject(p, R, t, i, r, NULL))
 			c += huber_c(hypot(r[0], r[1]), p->huber_px);
-	relative(p, R, t, E, NULL);
+	relative(p, R, t, Rr, tr, E);
 	for (int i = 0; i < p->n_epi; i++)
 		if (p->epi_use[i])
 			c += p->epi_weight *
@@ -114,8 +108,7 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 {
 	const double h = 1e-7;
 	double f = 0.5 * (p->K[0] + p->K[1]), Rr[9], tr[3], E[9], Eq[6][9];
-	mvod_motion_between(p->Rp, p->tp, R, t, Rr, tr);
-	mvod_motion_essential(Rr, tr, E);
+	relative(p, R, t, Rr, tr, E);
 	for (int q = 0; q < 6; q++) { /* the step moves as the pose does */
 		double d[6] = {0}, Rq[9], tq[3];
 		d[q] = h;
@@ -137,8 +130,9 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 /* The tracks within the gate at the start pose. */
 static int select_epi(struct mvod_posefit *p, const double R[9], const double t[3])
 {
-	double E[9], len, f = 0.5 * (p->K[0] + p->K[1]);
-	relative(p, R, t, E, &len);
+	double Rr[9], tr[3], E[9], f = 0.5 * (p->K[0] + p->K[1]);
+	relative(p, R, t, Rr, tr, E);
+	double len = mvod_vec3_norm(tr);
 	int k = 0;
 	for (int i = 0; i < p->n_epi; i++) {
 		double r = fabs(f * mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i));
