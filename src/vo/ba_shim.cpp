@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <vector>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -165,6 +166,9 @@ struct reprojection_cost final : ceres::SizedCostFunction<2, 6, 3> {
 
 struct mvod_ba {
 	ceres::Solver::Options options;
+	/* Kept across solves: Ceres's context, and one cost per observation (grown, never shrunk). */
+	std::unique_ptr<ceres::Context> context{ceres::Context::Create()};
+	std::vector<std::unique_ptr<reprojection_cost>> costs;
 };
 
 extern "C" int mvod_ba_create(struct mvod_ba **out)
@@ -209,9 +213,12 @@ static bool valid(const struct mvod_ba_problem *p)
 }
 
 /* Adds every observation in front of its camera; flags the others. Returns those flagged. */
-static int build(ceres::Problem &pb, ceres::LossFunction *loss, const struct mvod_ba_problem *p)
+static int build(struct mvod_ba *ba, ceres::Problem &pb, ceres::LossFunction *loss,
+		 const struct mvod_ba_problem *p)
 {
 	int behind = 0;
+	while ((int)ba->costs.size() < p->n_obs)
+		ba->costs.push_back(std::make_unique<reprojection_cost>(reprojection{}));
 	for (int i = 0; i < p->n_obs; i++) {
 		const struct mvod_ba_obs &o = p->obs[i];
 		p->outlier[i] = depth_of(p, o) <= 0;
@@ -219,8 +226,8 @@ static int build(ceres::Problem &pb, ceres::LossFunction *loss, const struct mvo
 			behind++;
 			continue;
 		}
-		auto *cost = new reprojection_cost(
-			reprojection{o.u, o.v, 1.0 / o.sigma, p->fx, p->fy, p->cx, p->cy});
+		reprojection_cost *cost = ba->costs[i].get();
+		cost->f = reprojection{o.u, o.v, 1.0 / o.sigma, p->fx, p->fy, p->cx, p->cy};
 		pb.AddResidualBlock(cost, loss, p->poses + 6 * o.pose, p->points + 3 * o.point);
 	}
 	for (int k = 0; p->fixed && k < p->n_poses; k++)
@@ -256,9 +263,16 @@ extern "C" int mvod_ba_solve(struct mvod_ba *ba, const struct mvod_ba_problem *p
 			return -EINVAL;
 		ceres::Problem::Options po;
 		po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP; /* one loss, ours */
+		po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP; /* ba->costs */
+		/*
+		 * Ceres's checks of each residual's blocks (sizes, one block twice): valid() has
+		 * checked the indices, and a residual's pose and point are distinct arrays.
+		 */
+		po.disable_all_safety_checks = true;
+		po.context = ba->context.get();
 		auto loss = std::make_unique<ceres::HuberLoss>(o->huber);
 		ceres::Problem pb(po);
-		build(pb, loss.get(), p);
+		build(ba, pb, loss.get(), p);
 		if (pb.NumResidualBlocks() > 0) {
 			ceres::Solver::Options so = ba->options;
 			so.max_num_iterations = o->max_iterations;
