@@ -19,3 +19,11 @@ int mvod_ba_solve(struct mvod_ba *ba, const struct mvod_ba_problem *p,
 void mvod_ba_destroy(struct mvod_ba *ba)
 {
 }
+
+int mvod_ba_jacobian_mismatches(const double pose[6], const double X[3],
+				const struct mvod_ba_obs *o, double fx, double fy, double cx,
+				double cy, bool *evaluated)
+{
+	*evaluated = false;
+	return -ENOTSUP;
+}

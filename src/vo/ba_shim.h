@@ -74,6 +74,17 @@ int mvod_ba_solve(struct mvod_ba *ba, const struct mvod_ba_problem *p,
 		  const struct mvod_ba_options *o, struct mvod_ba_result *r);
 void mvod_ba_destroy(struct mvod_ba *ba);
 
+/*
+ * For tests: the reprojection residual of observation o (its pose and point indices unused)
+ * at pose and X, with the hand-written Jacobians bundle adjustment uses and with Ceres's
+ * AutoDiff; how many of the 2 residuals and 18 Jacobian entries differ (a zero's sign aside), or
+ * -1 when one of them evaluates and the other does not. *evaluated: both did (the point is in
+ * front of the camera). -ENOTSUP without Ceres.
+ */
+int mvod_ba_jacobian_mismatches(const double pose[6], const double X[3],
+				const struct mvod_ba_obs *o, double fx, double fy, double cx,
+				double cy, bool *evaluated);
+
 #ifdef __cplusplus
 }
 #endif

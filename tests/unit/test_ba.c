@@ -258,6 +258,42 @@ static void test_thread_solves_as_inline(void **state)
 	mvod_ba_thread_destroy(NULL);
 }
 
+/*
+ * The hand-written Jacobians of the reprojection cost equal Ceres's AutoDiff bit for bit (map
+ * mode's trajectories are byte-identical to AutoDiff's because of it): exact equality, no
+ * tolerance, since a last-bit difference is what a Ceres upgrade changing its Jet or
+ * AngleAxisRotatePoint would show first. Rotations from none and below Ceres's small-angle
+ * threshold (theta^2 <= DBL_EPSILON, its Taylor branch) to 3 rad; points in front of the camera
+ * and some behind it (then neither evaluates).
+ */
+static void test_jacobians_as_autodiff(void **state)
+{
+	(void)state;
+	static const double scale[] = {0, 1e-9, 1e-4, 0.05, 0.5, 1.7};
+	srand48(12);
+	int evaluated = 0, cases = 0;
+	for (int s = 0; s < 6; s++)
+		for (int i = 0; i < 5000; i++, cases++) {
+			double pose[6], X[3];
+			for (int k = 0; k < 3; k++) {
+				pose[k] = (2 * drand48() - 1) * scale[s];
+				pose[3 + k] = 2 * drand48() - 1;
+				X[k] = (2 * drand48() - 1) * 10;
+			}
+			X[2] += 8; /* from 2 m behind to 18 m in front */
+			struct mvod_ba_obs o = {0, 0, drand48() * SCENE_W, drand48() * SCENE_H,
+						1 + drand48()};
+			bool ev;
+			assert_int_equal(mvod_ba_jacobian_mismatches(pose, X, &o, SCENE_F,
+								     SCENE_F * 1.01, SCENE_CX,
+								     SCENE_CY, &ev),
+					 0);
+			evaluated += ev;
+		}
+	/* most in front (compared), some behind (both refuse) */
+	assert_true(evaluated > cases / 2 && evaluated < cases);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -266,6 +302,7 @@ int main(void)
 		cmocka_unit_test(test_bad_problem),
 		cmocka_unit_test(test_kitti_sized_window),
 		cmocka_unit_test(test_thread_solves_as_inline),
+		cmocka_unit_test(test_jacobians_as_autodiff),
 	};
 	return cmocka_run_group_tests(tests, setup, teardown);
 }
