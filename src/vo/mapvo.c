@@ -20,6 +20,24 @@
  */
 #define KF_SHARE 0.9
 /*
+ * KLT's keyframes with a given scale (--scale gt, height; issue 12). Its tracks die slowly,
+ * so below KF_SHARE alone it made a keyframe on 95 % of KITTI's frames and bundle adjustment
+ * ran on almost every one. There a frame under KF_SHARE becomes one when it also tracks fewer
+ * than KLT_KF_SHARE of them (a turn, or a lot lost), or when the camera has moved
+ * KLT_KF_BASELINE of the median depth of its tracked points since the last keyframe (SVO's
+ * criterion: parallax the new keyframe can triangulate with): KITTI 06 map klt height SE(3)
+ * ATE 0.565 -> 0.295 m, scale drift 1.024 -> 1.001 (two-view's 0.408 m, 1.001), 07 0.372 ->
+ * 0.214 m, 1.089 -> 1.049; keyframes on 06 / 07 48 / 136 -> 38 / 78. With free scale, where
+ * the gauge alone carries the unit, keyframes stay at KF_SHARE: the same rule (0.75 there,
+ * two held) kept the clips (07 drift 1.150 -> 1.130) but cost mvod-synth's KITTI 00 t_rel
+ * 3.81 -> 10.53 % at 480 tracks, 3.06 -> 4.61 % at 500. Other variants (BENCHMARKS.md,
+ * "Sparser KLT keyframes"): share alone at 0.8 / 0.7, 07 free drift 1.209 / 1.163; a
+ * minimum gap of 2 frames, 1.253; the baseline at 0.07 / 0.15 with 0.5 below it, 1.307 /
+ * 1.318.
+ */
+#define KLT_KF_SHARE 0.7
+#define KLT_KF_BASELINE 0.1
+/*
  * Keyframes bundle adjustment holds at the old end of the window (the gauge: mapping_ba.c).
  * Two fix position, orientation and scale; the scale one window hands to the next is then
  * the distance between its two oldest keyframes, as the windows before estimated it. KLT
@@ -80,12 +98,13 @@ static int alloc_arrays(struct mvod_mapvo *mv)
 	mv->kfs = calloc(nk, sizeof(*mv->kfs));
 	mv->cur_first = calloc(c, sizeof(*mv->cur_first));
 	mv->ref_first = calloc(c, sizeof(*mv->ref_first));
+	mv->depth = calloc(c, sizeof(double));
 	mv->fa.cap = mv->fb.cap = mv->cap;
 	mv->fa.desc_bytes = mv->fb.desc_bytes = MVOD_MAP_DESC_BYTES;
 	bool ok = mv->kp && mv->cur_pt && mv->ref_pt && mv->ids && mv->pos && mv->desc &&
 		  mv->match && mv->X && mv->uv && mv->sigma && mv->pidx && mv->inlier &&
 		  mv->fa.kp && mv->fb.kp && mv->fa.desc && mv->fb.desc && mv->ia && mv->ib &&
-		  mv->kfs && mv->cur_first && mv->ref_first;
+		  mv->kfs && mv->cur_first && mv->ref_first && mv->depth;
 	return ok ? 0 : -ENOMEM;
 }
 
@@ -119,6 +138,7 @@ int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)
 	mv->ba_sync = vo->p.ba_sync;
 	mv->free_scale = vo->p.scale_mode == MVOD_SCALE_MODE_AUTO;
 	mv->n_held = vo->klt ? KLT_HELD : HELD;
+	mv->kf_share = mv->free_scale ? KF_SHARE : KLT_KF_SHARE;
 	mvod_map_params_default(&mv->mp);
 	mv->mp.kp_cap = vo->cap;
 	mv->K[0] = vo->cam.fx, mv->K[1] = vo->cam.fy, mv->K[2] = vo->cam.cx, mv->K[3] = vo->cam.cy;
@@ -146,7 +166,7 @@ void mvod_mapvo_destroy(struct mvod_mapvo *mv)
 	void *arrays[] = {mv->kp, mv->cur_pt, mv->ref_pt, mv->ids, mv->pos, mv->desc, mv->match,
 			  mv->X, mv->uv, mv->sigma, mv->pidx, mv->inlier, mv->fa.kp, mv->fb.kp,
 			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->kfs, mv->cur_first,
-			  mv->ref_first};
+			  mv->ref_first, mv->depth};
 	for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++)
 		free(arrays[i]);
 	free(mv);
@@ -321,6 +341,49 @@ static void promote_tracked(struct mvod_vo *vo, const double *gt)
 		mvod_klt_promote(vo->klt);
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+/*
+ * Distance of camera R, t from the newest keyframe's centre over the median depth of the
+ * frame's k pairs' inlier points (SVO's keyframe criterion); infinite without either.
+ */
+static double baseline(struct mvod_mapvo *mv, int k, const double R[9], const double t[3])
+{
+	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap), n = 0;
+	const struct mvod_map_keyframe *kf =
+		nk > 0 ? mvod_map_keyframe(mv->map, mv->kfs[nk - 1]) : NULL;
+	if (!kf)
+		return INFINITY;
+	double ck[3], cc[3], Xc[3]; /* the centres' negatives, -R^T t: their distance is the same */
+	mvod_mat3_tvec(kf->Rcw, kf->tcw, ck);
+	mvod_mat3_tvec(R, t, cc);
+	for (int i = 0; i < k; i++) {
+		if (!mv->inlier[i])
+			continue;
+		mvod_rigid_apply(R, t, mv->X + 3 * i, Xc);
+		if (Xc[2] > 0)
+			mv->depth[n++] = Xc[2];
+	}
+	if (n == 0)
+		return INFINITY;
+	qsort(mv->depth, (size_t)n, sizeof(double), cmp_double);
+	return mvod_vec3_dist(ck, cc) / mv->depth[n / 2];
+}
+
+/* Whether the frame (k PnP pairs, inliers of them, at R, t) becomes a keyframe. */
+static bool kf_due(struct mvod_vo *vo, int k, int inliers, const double R[9], const double t[3])
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	if (inliers >= KF_SHARE * mv->kf_tracked)
+		return false;
+	return !vo->klt || inliers < mv->kf_share * mv->kf_tracked ||
+	       baseline(mv, k, R, t) >= KLT_KF_BASELINE;
+}
+
 /* A frame tracked with k PnP pairs (inlier[] set): counters, pose, keyframe, result. */
 static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const double t[3],
 		  const double *gt, struct mvod_vo_result *res)
@@ -334,7 +397,7 @@ static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const do
 	publish(vo, R, t, gt);
 	set_pose(mv, R, t);
 	mv->since_kf++;
-	if (inliers < KF_SHARE * mv->kf_tracked) {
+	if (kf_due(vo, k, inliers, R, t)) {
 		int ret = mvod_mapping_keyframe(vo, &res->keyframe);
 		if (ret)
 			return ret;
