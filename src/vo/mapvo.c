@@ -68,6 +68,22 @@
 #define EPI_HUBER_PX 1.0
 #define EPI_WEIGHT 1.0
 #define EPI_ITERATIONS 5
+/*
+ * ORB's refinement (track_orb) on the same problem: the map points it matched by projection
+ * and its descriptor matches with the last frame (the two-view matcher's, ratio test and
+ * cross-check) whose keypoint there tracked no point, each residual in its keypoints' sigma
+ * (1.2^octave; a match's both keypoints', as twoview.c's refinement weighs them). ORB's
+ * points sit at up to 7 octaves, so KLT's pixel terms let its coarse keypoints pull as hard
+ * as its fine ones. The gate and Huber's threshold are in sigmas, a Sampson sigma weighs half
+ * a reprojection sigma. Measured on KITTI, map, --scale gt, err_avg / dir_deg_mean, 06 and 07
+ * (main: 0.121 / 1.29, 0.109 / 2.52): KLT's pixel terms 0.104 / 1.01, 0.076 / 1.81; in
+ * sigmas 0.086 / 0.73, 0.065 / 1.42; gate 3 sigma 0.071 / 0.45, 0.060 / 1.24 but 07's free
+ * scale Sim(3) ATE 0.515 -> 1.090 m; gate 2, weight 0.5 (these) 0.079 / 0.55, 0.057 / 1.10,
+ * 07 free 0.554 m (BENCHMARKS.md, issue 12's "ORB's map pose on every match").
+ */
+#define ORB_EPI_GATE_SIGMA 2.0
+#define ORB_EPI_HUBER_SIGMA 1.0
+#define ORB_EPI_WEIGHT 0.5
 /* Chi-square gate (2 dof, 95 %) on a reprojection error in sigma units, as the shims use. */
 double mvod_mapvo_sigma(int octave)
 {
@@ -450,16 +466,18 @@ static int klt_pairs(struct mvod_vo *vo)
 }
 
 /*
- * KLT: the tracks whose keypoint in the last frame observes no live map point (most of them:
- * far ones never reach the 3 deg a point needs), normalised into vo->x1 (last frame) and
- * vo->x2 (this one), for their epipolar distances. Returns how many.
+ * The first n_matches of vo->matches (KLT's tracks, or ORB's descriptor matches with the last
+ * frame) whose keypoint in the last frame observes no live map point (most of them: far ones
+ * never reach the 3 deg a point needs), normalised into vo->x1 (last frame) and vo->x2 (this
+ * one), for their epipolar distances, and each one's sigma into vo->scratch (ORB's weights).
+ * Returns how many.
  */
-static int epipolar_tracks(struct mvod_vo *vo)
+static int epipolar_tracks(struct mvod_vo *vo, int n_matches)
 {
 	struct mvod_mapvo *mv = vo->mapvo;
 	const struct mvod_camera *c = &vo->cam;
 	int m = 0;
-	for (int i = 0; i < vo->klt_matches; i++) {
+	for (int i = 0; i < n_matches; i++) {
 		int a = vo->matches[i].a, b = vo->matches[i].b;
 		if (mvod_map_point(mv->map, mv->ref_pt[a]))
 			continue;
@@ -468,6 +486,8 @@ static int epipolar_tracks(struct mvod_vo *vo)
 		vo->x1[2 * m + 1] = (ka->y - c->cy) / c->fy;
 		vo->x2[2 * m] = (kb->x - c->cx) / c->fx;
 		vo->x2[2 * m + 1] = (kb->y - c->cy) / c->fy;
+		double sa = mvod_mapvo_sigma(ka->octave), sb = mvod_mapvo_sigma(kb->octave);
+		vo->scratch[m] = sqrt(0.5 * (sa * sa + sb * sb));
 		m++;
 	}
 	return m;
@@ -475,22 +495,29 @@ static int epipolar_tracks(struct mvod_vo *vo)
 
 /*
  * The pose (R, t in and out) refined once more on the n map points PnP kept (mv->inlier) and
- * every other track's distance to its epipolar line from the last frame (posefit.h). A few
+ * every other track's (of the first n_matches of vo->matches) distance to its epipolar line from the last frame (posefit.h). A few
  * dozen near points alone leave a yaw and a sideways shift that trade against each other
  * (KITTI 07: map mode's yaw error per frame 0.021 deg against two-view's 0.016, biased
  * through whole turns); the far tracks pin the rotation, as they do two-view's: 0.014.
  */
-static void epipolar_refine(struct mvod_vo *vo, int n, double R[9], double t[3])
+static void epipolar_refine(struct mvod_vo *vo, int n, int n_matches, double R[9], double t[3])
 {
 	struct mvod_mapvo *mv = vo->mapvo;
 	struct mvod_posefit p = {.X = mv->X, .uv = mv->uv, .use = mv->inlier, .n_pts = n,
 				 .x1 = vo->x1, .x2 = vo->x2, .epi_use = vo->mask,
-				 .n_epi = epipolar_tracks(vo), .epi_weight = EPI_WEIGHT,
+				 .n_epi = epipolar_tracks(vo, n_matches), .epi_weight = EPI_WEIGHT,
 				 .epi_gate_px = EPI_GATE_PX, .huber_px = EPI_HUBER_PX,
 				 .iterations = EPI_ITERATIONS};
 	memcpy(p.Rp, mv->Rcw, sizeof(p.Rp));
 	memcpy(p.tp, mv->tcw, sizeof(p.tp));
 	memcpy(p.K, mv->K, sizeof(p.K));
+	if (!vo->klt) { /* in sigmas: ORB_EPI_* */
+		p.pt_sigma = mv->sigma;
+		p.epi_sigma = vo->scratch;
+		p.epi_weight = ORB_EPI_WEIGHT;
+		p.epi_gate_px = ORB_EPI_GATE_SIGMA;
+		p.huber_px = ORB_EPI_HUBER_SIGMA;
+	}
 	mvod_posefit_refine(&p, R, t);
 }
 
@@ -511,11 +538,16 @@ static int track_klt(struct mvod_vo *vo, double R[9], double t[3], int *np)
 	if (k < vo->p.min_matches)
 		k = mvod_pnp_solve(mv->pnp, mv->X, mv->uv, mv->sigma, n, mv->K, R, t, mv->inlier);
 	if (k >= vo->p.min_matches)
-		epipolar_refine(vo, n, R, t);
+		epipolar_refine(vo, n, vo->klt_matches, R, t);
 	return k;
 }
 
-/* ORB: the map's points matched by projection from the prediction, else re-found. */
+/*
+ * ORB: the map's points matched by projection from the prediction, else re-found; then the
+ * pose refined once more with the other descriptor matches' epipolar distances from the last
+ * frame (epipolar_refine; re-finding has matched them already). Costs the two-view matcher's
+ * distance table every frame: 400e6 -> 486e6 instructions a frame (callgrind, KITTI 06).
+ */
 static int track_orb(struct mvod_vo *vo, double R[9], double t[3], int *np,
 		     struct mvod_vo_result *res)
 {
@@ -526,8 +558,20 @@ static int track_orb(struct mvod_vo *vo, double R[9], double t[3], int *np,
 		return ret;
 	*np = gather(mv);
 	int k = track_projection(mv, *np, R, t);
-	if (k < vo->p.min_matches)
+	bool refound = false;
+	if (k < vo->p.min_matches) {
 		k = refind(vo, *np, R, t, res);
+		refound = true;
+	}
+	if (k < vo->p.min_matches)
+		return k;
+	int nm = res->matches;
+	if (!refound) {
+		ret = mvod_match(vo->matcher, &vo->ref->f, &vo->cur->f, vo->matches, vo->cap, &nm);
+		if (ret)
+			return ret;
+	}
+	epipolar_refine(vo, mv->n_pairs, nm, R, t);
 	return k;
 }
 

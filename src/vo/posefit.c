@@ -46,10 +46,13 @@ static bool reproject(const struct mvod_posefit *p, const double R[9], const dou
 	if (!(c[2] > 1e-9))
 		return false;
 	double iz = 1.0 / c[2], fx = p->K[0], fy = p->K[1];
-	r[0] = fx * c[0] * iz + p->K[2] - p->uv[2 * i];
-	r[1] = fy * c[1] * iz + p->K[3] - p->uv[2 * i + 1];
+	double w = p->pt_sigma ? 1.0 / p->pt_sigma[i] : 1.0;
+	r[0] = w * (fx * c[0] * iz + p->K[2] - p->uv[2 * i]);
+	r[1] = w * (fy * c[1] * iz + p->K[3] - p->uv[2 * i + 1]);
 	if (!J)
 		return true;
+	fx *= w;
+	fy *= w;
 	/* d(uv)/dc, then dc/d(w, tau) = [-[c]x | I]. */
 	double du[3] = {fx * iz, 0, -fx * c[0] * iz * iz}, dv[3] = {0, fy * iz, -fy * c[1] * iz * iz};
 	const double dc[9] = {0, c[2], -c[1], -c[2], 0, c[0], c[1], -c[0], 0};
@@ -60,6 +63,12 @@ static bool reproject(const struct mvod_posefit *p, const double R[9], const dou
 		J[9 + q] = dv[q];
 	}
 	return true;
+}
+
+/* Track i's Sampson distance in pixels (f) over its sigma: the factor to normalised units. */
+static double epi_f(const struct mvod_posefit *p, double f, int i)
+{
+	return p->epi_sigma ? f / p->epi_sigma[i] : f;
 }
 
 /* Robust cost of the whole problem at R, t. */
@@ -73,7 +82,8 @@ static double cost(const struct mvod_posefit *p, const double R[9], const double
 	for (int i = 0; i < p->n_epi; i++)
 		if (p->epi_use[i])
 			c += p->epi_weight *
-			     huber_c(fabs(f * mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i)),
+			     huber_c(fabs(epi_f(p, f, i) *
+					  mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i)),
 				     p->huber_px);
 	return c;
 }
@@ -119,9 +129,9 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 		if (!p->epi_use[i])
 			continue;
 		const double *x1 = p->x1 + 2 * i, *x2 = p->x2 + 2 * i;
-		double r = f * mvod_motion_sampson(E, x1, x2), J[6];
+		double fi = epi_f(p, f, i), r = fi * mvod_motion_sampson(E, x1, x2), J[6];
 		for (int q = 0; q < 6; q++)
-			J[q] = (f * mvod_motion_sampson(Eq[q], x1, x2) - r) / h;
+			J[q] = (fi * mvod_motion_sampson(Eq[q], x1, x2) - r) / h;
 		accumulate(J, r, p->epi_weight * huber_w(fabs(r), p->huber_px), A, g);
 	}
 }
@@ -135,7 +145,7 @@ static int select_epi(struct mvod_posefit *p, const double R[9], const double t[
 	double len = mvod_vec3_norm(tr);
 	int k = 0;
 	for (int i = 0; i < p->n_epi; i++) {
-		double r = fabs(f * mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i));
+		double r = fabs(epi_f(p, f, i) * mvod_motion_sampson(E, p->x1 + 2 * i, p->x2 + 2 * i));
 		p->epi_use[i] = len > 0 && r <= p->epi_gate_px;
 		k += p->epi_use[i];
 	}
