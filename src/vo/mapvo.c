@@ -12,6 +12,7 @@
 
 #include "klt.h"
 #include "posefit.h"
+#include "util/linalg.h"
 
 /*
  * A frame becomes a keyframe when it tracks fewer than this share of the points the last
@@ -357,12 +358,6 @@ static void promote_tracked(struct mvod_vo *vo, const double *gt)
 		mvod_klt_promote(vo->klt);
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-	double x = *(const double *)a, y = *(const double *)b;
-	return (x > y) - (x < y);
-}
-
 /*
  * Distance of camera R, t from the newest keyframe's centre over the median depth of the
  * frame's k pairs' inlier points (SVO's keyframe criterion); infinite without either.
@@ -386,8 +381,8 @@ static double baseline(struct mvod_mapvo *mv, int k, const double R[9], const do
 	}
 	if (n == 0)
 		return INFINITY;
-	qsort(mv->depth, (size_t)n, sizeof(double), cmp_double);
-	return mvod_vec3_dist(ck, cc) / mv->depth[n / 2];
+	/* Quickselect, not qsort: glibc's qsort mallocs its buffer beyond 1 KiB (128 depths). */
+	return mvod_vec3_dist(ck, cc) / mvod_median(mv->depth, n);
 }
 
 /* Whether the frame (k PnP pairs, inliers of them, at R, t) becomes a keyframe. */

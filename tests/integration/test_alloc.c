@@ -259,7 +259,7 @@ static int setup(void **state)
 
 /* Runs the pipeline over max_frames frames of the clip, with every output on, under the count. */
 static void run(int64_t max_frames, bool count, enum mvod_frontend fe, enum mvod_vo_mode mode,
-		struct tally *t)
+		enum mvod_scale_mode scale, struct tally *t)
 {
 	char source[300], calib[300], traj[300], url[400];
 	snprintf(source, sizeof(source), "file:%s/video.mkv", dir);
@@ -276,6 +276,8 @@ static void run(int64_t max_frames, bool count, enum mvod_frontend fe, enum mvod
 	o.max_frames = max_frames;
 	o.vo.frontend = fe;
 	o.vo.mode = mode;
+	o.vo.scale_mode = scale;
+	o.vo.camera_height_m = 1.6; /* mvod-synth's street: the ground 1.6 m below the camera */
 	o.vo.ba_sync = true; /* the same keyframes land their bundle adjustment on every run */
 	struct mvod_run_summary sum;
 	for (int i = 0; i < n_owners; i++) {
@@ -294,12 +296,13 @@ static void run(int64_t max_frames, bool count, enum mvod_frontend fe, enum mvod
 	}
 }
 
-static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe, enum mvod_vo_mode mode)
+static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe, enum mvod_vo_mode mode,
+					      enum mvod_scale_mode scale)
 {
 	struct tally warm, a, b;
-	run(WARMUP, false, fe, mode, &warm);
-	run(SHORT, true, fe, mode, &a);
-	run(LONG, true, fe, mode, &b);
+	run(WARMUP, false, fe, mode, scale, &warm);
+	run(SHORT, true, fe, mode, scale, &a);
+	run(LONG, true, fe, mode, scale, &b);
 	const double frames = LONG - SHORT;
 	long own = -1, total_calls = 0, total_bytes = 0;
 	printf("allocations per frame in steady state, by the object that asked, and through which "
@@ -326,7 +329,8 @@ static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe, enum mvod_v
 static void test_loop_allocates_nothing_of_its_own(void **state)
 {
 	(void)state;
-	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_ORB, MVOD_VO_TWOVIEW);
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_ORB, MVOD_VO_TWOVIEW,
+					  MVOD_SCALE_MODE_AUTO);
 }
 
 /*
@@ -336,21 +340,34 @@ static void test_loop_allocates_nothing_of_its_own(void **state)
 static void test_map_loop_allocates_nothing_of_its_own(void **state)
 {
 	(void)state;
-	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_ORB, MVOD_VO_MAP);
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_ORB, MVOD_VO_MAP,
+					  MVOD_SCALE_MODE_AUTO);
 }
 
 /* Map mode on KLT tracks (auto's choice): the point ids ride in the tracks' fixed arrays. */
 static void test_map_klt_loop_allocates_nothing_of_its_own(void **state)
 {
 	(void)state;
-	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT, MVOD_VO_MAP);
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT, MVOD_VO_MAP,
+					  MVOD_SCALE_MODE_AUTO);
+}
+
+/*
+ * Map mode on KLT tracks with the camera's height: the road band's fit, the map's rescaling
+ * and the keyframe rule a given scale adds (the baseline over the tracks' median depth).
+ */
+static void test_map_klt_height_loop_allocates_nothing_of_its_own(void **state)
+{
+	(void)state;
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT, MVOD_VO_MAP, MVOD_SCALE_MODE_HEIGHT);
 }
 
 /* The KLT front end's tracks, corners and pyramids live in buffers made at create. */
 static void test_klt_loop_allocates_nothing_of_its_own(void **state)
 {
 	(void)state;
-	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT, MVOD_VO_TWOVIEW);
+	loop_allocates_nothing_of_its_own(MVOD_FRONTEND_KLT, MVOD_VO_TWOVIEW,
+					  MVOD_SCALE_MODE_AUTO);
 }
 
 static long calls_of(const void *base)
@@ -389,6 +406,7 @@ int main(void)
 		cmocka_unit_test(test_klt_loop_allocates_nothing_of_its_own),
 		cmocka_unit_test(test_map_loop_allocates_nothing_of_its_own),
 		cmocka_unit_test(test_map_klt_loop_allocates_nothing_of_its_own),
+		cmocka_unit_test(test_map_klt_height_loop_allocates_nothing_of_its_own),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
