@@ -115,13 +115,12 @@ static int alloc_arrays(struct mvod_mapvo *mv)
 	mv->kfs = calloc(nk, sizeof(*mv->kfs));
 	mv->cur_first = calloc(c, sizeof(*mv->cur_first));
 	mv->ref_first = calloc(c, sizeof(*mv->ref_first));
-	mv->depth = calloc(c, sizeof(double));
 	mv->fa.cap = mv->fb.cap = mv->cap;
 	mv->fa.desc_bytes = mv->fb.desc_bytes = MVOD_MAP_DESC_BYTES;
 	bool ok = mv->kp && mv->cur_pt && mv->ref_pt && mv->ids && mv->pos && mv->desc &&
 		  mv->match && mv->X && mv->uv && mv->sigma && mv->pidx && mv->inlier &&
 		  mv->fa.kp && mv->fb.kp && mv->fa.desc && mv->fb.desc && mv->ia && mv->ib &&
-		  mv->kfs && mv->cur_first && mv->ref_first && mv->depth;
+		  mv->kfs && mv->cur_first && mv->ref_first;
 	return ok ? 0 : -ENOMEM;
 }
 
@@ -155,7 +154,6 @@ int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)
 	mv->ba_sync = vo->p.ba_sync;
 	mv->free_scale = vo->p.scale_mode == MVOD_SCALE_MODE_AUTO;
 	mv->n_held = vo->klt ? KLT_HELD : HELD;
-	mv->kf_share = mv->free_scale ? KF_SHARE : KLT_KF_SHARE;
 	mvod_map_params_default(&mv->mp);
 	mv->mp.kp_cap = vo->cap;
 	mv->K[0] = vo->cam.fx, mv->K[1] = vo->cam.fy, mv->K[2] = vo->cam.cx, mv->K[3] = vo->cam.cy;
@@ -183,7 +181,7 @@ void mvod_mapvo_destroy(struct mvod_mapvo *mv)
 	void *arrays[] = {mv->kp, mv->cur_pt, mv->ref_pt, mv->ids, mv->pos, mv->desc, mv->match,
 			  mv->X, mv->uv, mv->sigma, mv->pidx, mv->inlier, mv->fa.kp, mv->fb.kp,
 			  mv->fa.desc, mv->fb.desc, mv->ia, mv->ib, mv->kfs, mv->cur_first,
-			  mv->ref_first, mv->depth};
+			  mv->ref_first};
 	for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++)
 		free(arrays[i]);
 	free(mv);
@@ -360,10 +358,12 @@ static void promote_tracked(struct mvod_vo *vo, const double *gt)
 
 /*
  * Distance of camera R, t from the newest keyframe's centre over the median depth of the
- * frame's k pairs' inlier points (SVO's keyframe criterion); infinite without either.
+ * frame's k pairs' inlier points (SVO's keyframe criterion); infinite without either. The
+ * depths go into vo->scratch (cap doubles; k <= cap).
  */
-static double baseline(struct mvod_mapvo *mv, int k, const double R[9], const double t[3])
+static double baseline(struct mvod_vo *vo, int k, const double R[9], const double t[3])
 {
+	struct mvod_mapvo *mv = vo->mapvo;
 	int nk = mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap), n = 0;
 	const struct mvod_map_keyframe *kf =
 		nk > 0 ? mvod_map_keyframe(mv->map, mv->kfs[nk - 1]) : NULL;
@@ -377,12 +377,12 @@ static double baseline(struct mvod_mapvo *mv, int k, const double R[9], const do
 			continue;
 		mvod_rigid_apply(R, t, mv->X + 3 * i, Xc);
 		if (Xc[2] > 0)
-			mv->depth[n++] = Xc[2];
+			vo->scratch[n++] = Xc[2];
 	}
 	if (n == 0)
 		return INFINITY;
 	/* Quickselect, not qsort: glibc's qsort mallocs its buffer beyond 1 KiB (128 depths). */
-	return mvod_vec3_dist(ck, cc) / mvod_median(mv->depth, n);
+	return mvod_vec3_dist(ck, cc) / mvod_median(vo->scratch, n);
 }
 
 /* Whether the frame (k PnP pairs, inliers of them, at R, t) becomes a keyframe. */
@@ -391,8 +391,9 @@ static bool kf_due(struct mvod_vo *vo, int k, int inliers, const double R[9], co
 	struct mvod_mapvo *mv = vo->mapvo;
 	if (inliers >= KF_SHARE * mv->kf_tracked)
 		return false;
-	return !vo->klt || inliers < mv->kf_share * mv->kf_tracked ||
-	       baseline(mv, k, R, t) >= KLT_KF_BASELINE;
+	if (!vo->klt || mv->free_scale)
+		return true;
+	return inliers < KLT_KF_SHARE * mv->kf_tracked || baseline(vo, k, R, t) >= KLT_KF_BASELINE;
 }
 
 /* A frame tracked with k PnP pairs (inlier[] set): counters, pose, keyframe, result. */
@@ -464,8 +465,8 @@ static int klt_pairs(struct mvod_vo *vo)
  * The first n_matches of vo->matches (KLT's tracks, or ORB's descriptor matches with the last
  * frame) whose keypoint in the last frame observes no live map point (most of them: far ones
  * never reach the 3 deg a point needs), normalised into vo->x1 (last frame) and vo->x2 (this
- * one), for their epipolar distances, and each one's sigma into vo->scratch (ORB's weights).
- * Returns how many.
+ * one), for their epipolar distances, and with ORB each one's sigma into vo->scratch (its
+ * weights). Returns how many.
  */
 static int epipolar_tracks(struct mvod_vo *vo, int n_matches)
 {
@@ -481,8 +482,10 @@ static int epipolar_tracks(struct mvod_vo *vo, int n_matches)
 		vo->x1[2 * m + 1] = (ka->y - c->cy) / c->fy;
 		vo->x2[2 * m] = (kb->x - c->cx) / c->fx;
 		vo->x2[2 * m + 1] = (kb->y - c->cy) / c->fy;
-		double sa = mvod_mapvo_sigma(ka->octave), sb = mvod_mapvo_sigma(kb->octave);
-		vo->scratch[m] = sqrt(0.5 * (sa * sa + sb * sb));
+		if (!vo->klt) {
+			double sa = mvod_mapvo_sigma(ka->octave), sb = mvod_mapvo_sigma(kb->octave);
+			vo->scratch[m] = sqrt(0.5 * (sa * sa + sb * sb));
+		}
 		m++;
 	}
 	return m;
@@ -490,7 +493,8 @@ static int epipolar_tracks(struct mvod_vo *vo, int n_matches)
 
 /*
  * The pose (R, t in and out) refined once more on the n map points PnP kept (mv->inlier) and
- * every other track's (of the first n_matches of vo->matches) distance to its epipolar line from the last frame (posefit.h). A few
+ * every other track's (of the first n_matches of vo->matches) distance to its epipolar line
+ * from the last frame (posefit.h). A few
  * dozen near points alone leave a yaw and a sideways shift that trade against each other
  * (KITTI 07: map mode's yaw error per frame 0.021 deg against two-view's 0.016, biased
  * through whole turns); the far tracks pin the rotation, as they do two-view's: 0.014.

@@ -72,8 +72,6 @@ struct mvod_mapvo {
 	double vR[9], vt[3];   /* its motion from the frame before (constant-velocity model) */
 	int since_kf;          /* frames since the last keyframe */
 	int kf_tracked;        /* points tracked into the last keyframe (before it triangulated) */
-	double *depth;         /* [cap] scratch: depths of the tracked points (mapvo.c's baseline) */
-	double kf_share;       /* KLT: a keyframe below this share of kf_tracked, whatever the baseline */
 	/*
 	 * --scale height: log of the metres per map unit the filtered height measures (0: the
 	 * map is metric, or as metric as the chain it was built from).
