@@ -5,9 +5,8 @@
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
+
+#include "util/kernels.h"
 
 /* Larger than any camera frame (8K is 7680 x 4320), small enough that sizes cannot overflow. */
 #define MAX_SIDE 65535
@@ -128,36 +127,6 @@ static uint8_t paeth(uint8_t a, uint8_t b, uint8_t c)
 	return pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
 }
 
-/*
- * The Sub filter: d[x] = s[x] + d[x - 1], modulo 256. KITTI's PNGs use it on every row. With
- * SSE2 16 bytes at a time as a prefix sum in four shifted adds plus the last byte before them,
- * the same sums modulo 256 (KITTI 06/07 trajectories byte-identical): mvod_png_grey_decode
- * 2.15e6 -> 0.71e6 instructions per 1226x370 frame (callgrind, KITTI 06).
- */
-static void sub(uint8_t *d, const uint8_t *s, int w)
-{
-	int x = 0;
-	uint8_t left = 0;
-#if defined(__SSE2__)
-	__m128i carry = _mm_setzero_si128(); /* every byte: d[x - 1] */
-	for (; x + 16 <= w; x += 16) {
-		__m128i v = _mm_loadu_si128((const __m128i *)(s + x));
-		v = _mm_add_epi8(v, _mm_slli_si128(v, 1));
-		v = _mm_add_epi8(v, _mm_slli_si128(v, 2));
-		v = _mm_add_epi8(v, _mm_slli_si128(v, 4));
-		v = _mm_add_epi8(v, _mm_slli_si128(v, 8));
-		v = _mm_add_epi8(v, carry);
-		_mm_storeu_si128((__m128i *)(d + x), v);
-		carry = _mm_shuffle_epi32(_mm_shufflehi_epi16(_mm_srli_epi16(v, 8), 0xff), 0xff);
-		carry = _mm_or_si128(carry, _mm_slli_epi16(carry, 8));
-	}
-	if (x)
-		left = d[x - 1];
-#endif
-	for (; x < w; x++)
-		d[x] = left = (uint8_t)(s[x] + left);
-}
-
 /* Row d (w bytes) from its filtered bytes s and the row above, up (PNG's five filters, bpp 1). */
 static int unfilter(uint8_t *d, const uint8_t *s, const uint8_t *up, int filter, int w)
 {
@@ -166,7 +135,7 @@ static int unfilter(uint8_t *d, const uint8_t *s, const uint8_t *up, int filter,
 		memcpy(d, s, (size_t)w);
 		return 0;
 	case 1:
-		sub(d, s, w);
+		mvod_png_sub(d, s, w);
 		return 0;
 	case 2:
 		for (int x = 0; x < w; x++)

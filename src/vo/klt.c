@@ -10,12 +10,10 @@
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 
 #include "klt_shim.h"
 #include "scale.h"
+#include "util/kernels.h"
 
 /*
  * Lucas-Kanade window, pixels, and pyramid levels above the image, with at most ITERATIONS
@@ -179,64 +177,16 @@ static bool inside(const struct mvod_klt *k, float x, float y)
 	return x >= BORDER && y >= BORDER && x <= k->w - 1 - BORDER && y <= k->h - 1 - BORDER;
 }
 
-/*
- * Harris corner score (k = 0.04) over the 7x7 window around (x, y), central differences. The
- * sums are integers (each term at most 255^2, 49 of them under 2^24), so summing them as int
- * gives the float sums exactly (the same scores) at 73 % of the instructions (callgrind, KITTI 06,
- * 20 frames: 93.3e6 -> 68.2e6 in harris()). With SSE2 a row's seven differences are one vector
- * of int16 (|d| <= 255) and pmaddwd sums their products in pairs into int32: the same integers
- * in another order, so the same scores (KITTI 06/07 trajectories byte-identical), 3.1e6 -> 0.9e6
- * instructions per frame. (GCC's generic 8 x int32 vectors were slower: no 32-bit multiply in
- * SSE2, BENCHMARKS.md "Bit-identical cuts".)
- */
-#if defined(__SSE2__)
+/* Harris corner score over the 7x7 window around (x, y) (util/kernels.c). */
 static float harris(const struct mvod_image *g, int x, int y)
 {
-	/* Lane 7 is outside the window: zeroed before the products. */
-	const __m128i keep = _mm_set_epi16(0, -1, -1, -1, -1, -1, -1, -1), z = _mm_setzero_si128();
-	__m128i a = z, b = z, c = z;
-	for (int dy = -3; dy <= 3; dy++) {
-		const uint8_t *r = g->data + (size_t)(y + dy) * (size_t)g->stride + x;
-		/*
-		 * Bytes x-4 .. x+5 of this row: x+5 is read but masked. x <= w-1-BORDER and y + 3
-		 * < h - 1 (inside()), so even on the last row read it lies in the image.
-		 */
-		__m128i l = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(r - 4)), z);
-		__m128i rr = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(r - 2)), z);
-		__m128i u = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(r - 3 - g->stride)), z);
-		__m128i d = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(r - 3 + g->stride)), z);
-		__m128i ix = _mm_and_si128(_mm_sub_epi16(rr, l), keep);
-		__m128i iy = _mm_and_si128(_mm_sub_epi16(d, u), keep);
-		a = _mm_add_epi32(a, _mm_madd_epi16(ix, ix));
-		b = _mm_add_epi32(b, _mm_madd_epi16(iy, iy));
-		c = _mm_add_epi32(c, _mm_madd_epi16(ix, iy));
-	}
-	int32_t sa[4], sb[4], sc[4];
-	_mm_storeu_si128((__m128i *)sa, a);
-	_mm_storeu_si128((__m128i *)sb, b);
-	_mm_storeu_si128((__m128i *)sc, c);
-	float fa = (float)(sa[0] + sa[1] + sa[2] + sa[3]), fb = (float)(sb[0] + sb[1] + sb[2] + sb[3]),
-	      fc = (float)(sc[0] + sc[1] + sc[2] + sc[3]);
-	return fa * fb - fc * fc - 0.04f * (fa + fb) * (fa + fb);
+	/*
+	 * Reads bytes x-4 .. x+5 of rows y-3 .. y+3 and x-3 .. x+4 of rows y-4 and y+4: inside()
+	 * keeps x and y BORDER (4) from the edges, so x+5 on row y+3 <= h-2 is at worst the first
+	 * byte of the next row, in the image.
+	 */
+	return mvod_harris7(g->data + (size_t)y * (size_t)g->stride + (size_t)x, g->stride);
 }
-#else
-static float harris(const struct mvod_image *g, int x, int y)
-{
-	int32_t a = 0, b = 0, c = 0;
-	for (int dy = -3; dy <= 3; dy++) {
-		const uint8_t *r = g->data + (size_t)(y + dy) * (size_t)g->stride + x;
-		for (int dx = -3; dx <= 3; dx++) {
-			int32_t ix = r[dx + 1] - r[dx - 1];
-			int32_t iy = r[dx + g->stride] - r[dx - g->stride];
-			a += ix * ix;
-			b += iy * iy;
-			c += ix * iy;
-		}
-	}
-	float fa = (float)a, fb = (float)b, fc = (float)c;
-	return fa * fb - fc * fc - 0.04f * (fa + fb) * (fa + fb);
-}
-#endif
 
 /*
  * Strongest first, by Shell sort (Ciura's gaps) in place: glibc's qsort mallocs a buffer for
