@@ -59,11 +59,15 @@ if [ -f "$gt00" ]; then
 		echo "${args[*]}" >"$synth/args"
 		echo
 	fi
-	for scale in auto gt; do
-		bench "mvod-synth along the KITTI 00 ground truth, 4541 frames 640x192, $scale scale" \
-			--source "file:$synth/video.mkv" --calib "$synth/calib.json" \
-			--gt "$synth/gt.tum" --scale $scale --report "$out/kitti00-synth-$scale.md" \
-			--plots "$out/kitti00-synth-$scale"
+	# Map mode (the default), and two-view mode beside it for comparison.
+	for mode in map twoview; do
+		for scale in auto gt; do
+			bench "mvod-synth along KITTI 00's ground truth, 4541 frames, $mode, $scale scale" \
+				--source "file:$synth/video.mkv" --calib "$synth/calib.json" \
+				--gt "$synth/gt.tum" --mode $mode --scale $scale \
+				--report "$out/kitti00-synth-$mode-$scale.md" \
+				--plots "$out/kitti00-synth-$mode-$scale"
+		done
 	done
 else
 	echo "## KITTI 00 ground truth: $gt00 absent, skipped"
@@ -72,9 +76,13 @@ fi
 # Instruction counts repeat exactly where wall time does not: compare these across changes.
 dir=$data/kitti-odometry-06-clip
 if command -v valgrind >/dev/null && [ -d "$dir" ]; then
-	echo "## callgrind, KITTI 06 clip, first 20 frames, ground-truth scale"
-	valgrind --tool=callgrind --callgrind-out-file="$out/cg.out" "$build/mvod" --no-lcm -q \
-		--source "kitti:$dir/sequences/06" --gt "$dir/poses/06.txt" --scale gt --max-frames 20 \
-		2>&1 | sed -n 's/.*Collected : /    instructions: /p'
-	callgrind_annotate "$out/cg.out" 2>/dev/null | grep -E '^ *[0-9,]+ \(' | sed -n '2,6p'
+	for mode in map twoview; do
+		echo "## callgrind, KITTI 06 clip, first 20 frames, ground-truth scale, $mode mode"
+		valgrind --tool=callgrind --callgrind-out-file="$out/cg-$mode.out" "$build/mvod" \
+			--no-lcm -q --source "kitti:$dir/sequences/06" --gt "$dir/poses/06.txt" \
+			--scale gt --mode $mode --max-frames 20 \
+			2>&1 | sed -n 's/.*Collected : /    instructions: /p'
+		callgrind_annotate "$out/cg-$mode.out" 2>/dev/null | grep -E '^ *[0-9,]+ \(' |
+			sed -n '2,6p'
+	done
 fi

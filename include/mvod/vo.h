@@ -56,6 +56,11 @@ enum mvod_vo_mode {
 };
 /* The modes' names in enum order, NULL-terminated (the config file's choices). */
 extern const char *const mvod_vo_mode_names[];
+/*
+ * Whether this mvod can run map mode: false when it was built without Ceres (meson
+ * -Dceres=disabled, or libceres-dev absent), whose bundle adjustment map mode needs.
+ */
+bool mvod_vo_map_available(void);
 
 /* Robust estimator of the essential matrix. */
 enum mvod_robust_method {
@@ -134,7 +139,7 @@ enum mvod_stage {
 extern const char *const mvod_stage_names[MVOD_STAGE_COUNT];
 
 struct mvod_vo_params {
-	enum mvod_vo_mode mode; /* TWOVIEW */
+	enum mvod_vo_mode mode; /* MAP (mvod_vo_run_mode: when it runs two-view instead) */
 	double resize;          /* image scale factor in (0, 1]; intrinsics scaled to match. 1 */
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
 	enum mvod_frontend frontend; /* AUTO */
@@ -177,6 +182,18 @@ extern const char *const mvod_vo_descriptor_flags[];
  * klt otherwise. mvod_vo_create resolves it once; the run loop logs it.
  */
 enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p);
+/*
+ * Why map mode, asked for by p, cannot run: built without Ceres, or --scale external (map
+ * mode does not fuse the odometer yet); NULL when it can, or when p asks for two-view.
+ */
+const char *mvod_vo_map_missing(const struct mvod_vo_params *p);
+/*
+ * The mode p runs: p->mode, except that map mode runs as two-view where mvod_vo_map_missing
+ * says why, so that a build without Ceres runs the default and config files that say map,
+ * and the default takes the robot's speed. mvod_vo_create resolves it once; the run loop
+ * logs the reason.
+ */
+enum mvod_vo_mode mvod_vo_run_mode(const struct mvod_vo_params *p);
 /*
  * Whether the options fit the mode and front end, each clash -EINVAL naming the options in
  * err (an option would otherwise be silently ignored): --frontend klt with a descriptor

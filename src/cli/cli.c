@@ -143,9 +143,12 @@ void cli_usage_vo(FILE *out)
 {
 	fprintf(out,
 "Visual odometry:\n"
-"  --mode twoview|map    twoview (default): frame to frame, each step scaled by the structure\n"
-"                        it shares with the last; map: a local map of keyframes and points\n"
-"                        that carries one scale, PnP per frame and windowed bundle adjustment\n"
+"  --mode map|twoview    map (default): a local map of keyframes and points that carries\n"
+"                        one scale, PnP per frame and windowed bundle adjustment; twoview:\n"
+"                        frame to frame, each step scaled by the structure it shares with\n"
+"                        the last (kept for comparison; --detector sift needs it). Map runs\n"
+"                        as twoview, and says so, with --scale external and in a build\n"
+"                        without Ceres\n"
 "  --ba-sync             map mode, live camera: wait for each bundle adjustment (on its own\n"
 "                        thread) at the frame after its keyframe, as files and datasets\n"
 "                        always do: results independent of the machine's speed\n"

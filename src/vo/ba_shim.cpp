@@ -171,6 +171,8 @@ struct mvod_ba {
 	std::vector<std::unique_ptr<reprojection_cost>> costs;
 };
 
+extern "C" const bool mvod_ba_present = true;
+
 extern "C" int mvod_ba_create(struct mvod_ba **out)
 {
 	*out = nullptr;

@@ -1,7 +1,8 @@
 /*
  * The Ceres door of map mode: windowed bundle adjustment over caller-owned fixed arrays.
- * Plain C. Without Ceres (meson -Dceres=disabled, or libceres-dev absent) ba_none.c answers
- * -ENOTSUP to create, so map mode knows at start-up that it cannot refine its window.
+ * Plain C. Without Ceres (meson -Dceres=disabled, or libceres-dev absent) ba_none.c says so
+ * (mvod_ba_present false, -ENOTSUP to every call), and map mode is not run
+ * (vo.c, mvod_vo_run_mode).
  *
  * Poses are camera-from-world, X_cam = R(r) X_world + t, stored as 6 doubles: the angle-axis
  * vector r (radians; Ceres's AngleAxisRotatePoint) then t (map units). Pinhole projection
@@ -61,6 +62,9 @@ static inline void mvod_ba_options_default(struct mvod_ba_options *o)
 	o->max_iterations = 10;
 	o->chi2_outlier = 5.991;
 }
+
+/* Whether bundle adjustment is built in (Ceres); without it vo.c runs map mode as two-view. */
+extern const bool mvod_ba_present;
 
 struct mvod_ba;
 /* -ENOTSUP when built without Ceres. */

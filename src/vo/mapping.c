@@ -84,11 +84,18 @@ static int add_frame_kf(struct mvod_mapvo *mv, const struct frame_slot *k,
 	return mvod_map_add_keyframe(mv->map, &in, out, NULL);
 }
 
-/* A new point at world X seen by keypoint ja of keyframe a and jb of b. */
+/*
+ * A new point at world X seen by keypoint ja of keyframe a and jb of b; -EEXIST, and no point,
+ * when either keypoint observes one already: matchers without the cross-check (bf-ratio,
+ * flann, flann-ratio) pair a keypoint with two, which stopped the whole run at the first map.
+ */
 static int add_point(struct mvod_mapvo *mv, const double X[3], mvod_map_id a, int ja,
 		     mvod_map_id b, int jb, mvod_map_id *out)
 {
+	const struct mvod_map_keyframe *ka = mvod_map_keyframe(mv->map, a);
 	const struct mvod_map_keyframe *kb = mvod_map_keyframe(mv->map, b);
+	if (ka->pt[ja] != MVOD_MAP_NONE || kb->pt[jb] != MVOD_MAP_NONE)
+		return -EEXIST;
 	int ret = mvod_map_add_point(mv->map, X, kb->desc + (size_t)jb * MVOD_MAP_DESC_BYTES, b,
 				     out);
 	if (!ret)
@@ -119,9 +126,9 @@ static int init_points(struct mvod_vo *vo, int n, mvod_map_id a, mvod_map_id b)
 		int ret = add_point(mv, X, a, ia, b, ib, &mv->ref_pt[ib]);
 		if (ret == -ENOSPC)
 			break;
-		if (ret)
+		if (ret && ret != -EEXIST)
 			return ret;
-		made++;
+		made += !ret;
 	}
 	return made;
 }
@@ -317,8 +324,8 @@ static bool triangulate(const struct mvod_mapvo *mv, const struct mvod_map_keyfr
 
 /*
  * Keypoint ja of keyframe A (id a) with jb of B (id b), R, t the motion from A to B: a new point
- * when they triangulate with rays at most max_cos apart. 0 also when they do not, -ENOSPC
- * when the map is full, or -errno.
+ * when they triangulate with rays at most max_cos apart. 0 also when they do not or a keypoint
+ * observes a point already (add_point), -ENOSPC when the map is full, or -errno.
  */
 static int new_point(struct mvod_mapvo *mv, mvod_map_id a, const struct mvod_map_keyframe *A,
 		     int ja, mvod_map_id b, const struct mvod_map_keyframe *B, int jb,
@@ -328,7 +335,8 @@ static int new_point(struct mvod_mapvo *mv, mvod_map_id a, const struct mvod_map
 	mvod_map_id id;
 	if (!triangulate(mv, A, B, R, t, ja, jb, max_cos, X))
 		return 0;
-	return add_point(mv, X, a, ja, b, jb, &id);
+	int ret = add_point(mv, X, a, ja, b, jb, &id);
+	return ret == -EEXIST ? 0 : ret;
 }
 
 /* New points from the unmatched keypoints of keyframes a (older) and b (the new one). */

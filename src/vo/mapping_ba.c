@@ -148,13 +148,11 @@ static int land(struct mvod_mapvo *mv, bool wait)
  */
 int mvod_mapping_ba_settle(struct mvod_mapvo *mv)
 {
-	return mv->bat && !mvod_ba_thread_job(mv->bat) ? land(mv, true) : 0;
+	return !mvod_ba_thread_job(mv->bat) ? land(mv, true) : 0;
 }
 
 int mvod_mapping_ba(struct mvod_mapvo *mv)
 {
-	if (!mv->bat)
-		return 0;
 	int ret = mvod_mapping_ba_settle(mv);
 	if (ret)
 		return ret;
@@ -166,5 +164,5 @@ int mvod_mapping_ba(struct mvod_mapvo *mv)
 
 int mvod_mapping_ba_poll(struct mvod_mapvo *mv)
 {
-	return mv->bat ? land(mv, mv->ba_sync) : 0;
+	return land(mv, mv->ba_sync);
 }

@@ -138,8 +138,8 @@ static int create_parts(const struct mvod_vo *vo, struct mvod_mapvo *mv)
 	ret = mvod_pnp_create(&np, vo->cap, &mv->pnp);
 	if (ret)
 		return ret;
-	ret = mvod_ba_thread_create(mv->mp.kf_cap, mv->mp.point_cap, &mv->bat);
-	return ret == -ENOTSUP ? 0 : ret; /* without Ceres: no window refinement */
+	/* Without Ceres map mode does not run (vo.c, mvod_vo_run_mode). */
+	return mvod_ba_thread_create(mv->mp.kf_cap, mv->mp.point_cap, &mv->bat);
 }
 
 int mvod_mapvo_create(const struct mvod_vo *vo, struct mvod_mapvo **out)

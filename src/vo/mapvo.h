@@ -33,7 +33,7 @@ struct mvod_mapvo {
 	struct mvod_map_params mp;
 	struct mvod_pm *pm;
 	struct mvod_pnp *pnp;
-	/* Bundle adjustment's thread; NULL without Ceres: the window is not refined. */
+	/* Bundle adjustment's thread (map mode runs only with Ceres: vo.c) */
 	struct mvod_ba_thread *bat;
 	bool ba_sync; /* each result is waited for at the frame after its keyframe */
 	bool free_scale; /* --scale auto: nothing but bundle adjustment's gauge holds the unit */

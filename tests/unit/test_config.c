@@ -52,7 +52,7 @@ static const char every_key[] =
 	"robust = ransac\n"
 	"ransac-px = 2.5\n"
 	"confidence = 0.99\n"
-	"mode = map\n"
+	"mode = twoview\n" /* not the default (map), so that the key is seen to be read */
 	"min-parallax = 3\n"
 	"resize = 0.5\n"
 	"blur = 5\n"
@@ -94,7 +94,7 @@ static void assert_every_key(const struct mvod_config *c)
 	assert_true(c->run.vo.ransac_px == 2.5);
 	assert_true(c->run.vo.ransac_conf == 0.99);
 	assert_true(c->run.vo.min_parallax_px == 3);
-	assert_int_equal(c->run.vo.mode, MVOD_VO_MAP);
+	assert_int_equal(c->run.vo.mode, MVOD_VO_TWOVIEW);
 	assert_true(c->run.vo.resize == 0.5);
 	assert_int_equal(c->run.vo.blur_ksize, 5);
 	assert_true(c->run.vo.ba_sync);
@@ -134,6 +134,7 @@ static void test_defaults_and_format_from_name(void **state)
 	assert_int_equal(parse("# nothing\n\n; at all\n", &c, err, sizeof(err)), 0);
 	assert_null(c.run.source);
 	assert_int_equal(c.run.vo.max_features, 2000);
+	assert_int_equal(c.run.vo.mode, MVOD_VO_MAP); /* issue 12: map mode is the default */
 	assert_true(c.run.status_hz == 1);
 	assert_true(c.lcm_enabled);
 	assert_string_equal(c.pose_channel, "MVOD_POSE");

@@ -368,6 +368,11 @@ static struct mvod_vo *make_vo_on(enum mvod_scale_mode mode, const struct mvod_c
 {
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
+	/*
+	 * Two-view mode's per-step scaling (a step of its own from each measurement), not the
+	 * default map mode's, whose height lands at keyframes (mapscale.c; test_metric_scale.c).
+	 */
+	p.mode = MVOD_VO_TWOVIEW;
 	/* The seam below the detector takes keypoints with descriptors: the descriptor front end. */
 	p.frontend = MVOD_FRONTEND_ORB;
 	p.scale_mode = mode;

@@ -110,6 +110,8 @@ static struct mvod_pose at(double x, double y, double z, double yaw_deg)
  */
 static struct mvod_vo *make_vo_in(enum mvod_vo_mode mode, enum mvod_scale_mode scale)
 {
+	if (mode == MVOD_VO_MAP && !mvod_vo_map_available())
+		skip(); /* built without Ceres: map mode runs as two-view (test_run_mode) */
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
 	p.mode = mode;
@@ -499,11 +501,13 @@ static void test_frontend_auto(void **state)
 	struct mvod_vo_params p, d;
 	mvod_vo_params_default(&d);
 	assert_int_equal(d.frontend, MVOD_FRONTEND_AUTO);
+	assert_int_equal(d.mode, MVOD_VO_MAP); /* issue 12 */
 	assert_int_equal(mvod_vo_frontend(&d), MVOD_FRONTEND_KLT);
 	assert_null(mvod_vo_descriptor_option(&d));
 	p = d;
-	p.mode = MVOD_VO_MAP;
+	p.mode = MVOD_VO_TWOVIEW;
 	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
+	d.mode = MVOD_VO_TWOVIEW; /* SIFT below: the map keeps ORB descriptors (the end) */
 	for (int i = 0; mvod_vo_descriptor_flags[i]; i++) {
 		p = d;
 		switch (i) {
@@ -541,8 +545,34 @@ static void test_frontend_auto(void **state)
 	p = d;
 	p.mode = MVOD_VO_MAP;
 	p.detector = MVOD_DETECTOR_SIFT; /* the map keeps ORB descriptors */
+	if (!mvod_vo_map_available()) { /* without Ceres map runs as two-view, which takes SIFT */
+		assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+		return;
+	}
 	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
 	assert_non_null(strstr(err, "--mode map"));
+}
+
+/*
+ * The mode that runs: the one asked for, except map mode in a build without Ceres, which runs
+ * as two-view (so such a build runs the default); the VO created reports no map then.
+ */
+static void test_run_mode(void **state)
+{
+	(void)state;
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	bool map = mvod_vo_map_available();
+	assert_int_equal(mvod_vo_run_mode(&p), map ? MVOD_VO_MAP : MVOD_VO_TWOVIEW);
+	struct mvod_vo *vo = NULL;
+	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
+	assert_int_equal(vo->mapvo != NULL, map);
+	mvod_vo_destroy(vo);
+	p.mode = MVOD_VO_TWOVIEW;
+	assert_int_equal(mvod_vo_run_mode(&p), MVOD_VO_TWOVIEW);
+	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
+	assert_null(vo->mapvo);
+	mvod_vo_destroy(vo);
 }
 
 /*
@@ -858,6 +888,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_frontend_auto),
+		cmocka_unit_test(test_run_mode),
 		cmocka_unit_test(test_quality),
 		cmocka_unit_test(test_first_frame),
 		cmocka_unit_test(test_few_features_make_no_reference),
