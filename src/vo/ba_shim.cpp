@@ -261,7 +261,8 @@ extern "C" int mvod_ba_solve(struct mvod_ba *ba, const struct mvod_ba_problem *p
 {
 	return mvod_guarded([&] {
 		*r = {};
-		if (!valid(p) || !(o->huber > 0) || o->max_iterations < 1)
+		if (!valid(p) || !(o->huber > 0) || o->max_iterations < 1 ||
+		    !(o->function_tolerance >= 0))
 			return -EINVAL;
 		ceres::Problem::Options po;
 		po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP; /* one loss, ours */
@@ -278,6 +279,8 @@ extern "C" int mvod_ba_solve(struct mvod_ba *ba, const struct mvod_ba_problem *p
 		if (pb.NumResidualBlocks() > 0) {
 			ceres::Solver::Options so = ba->options;
 			so.max_num_iterations = o->max_iterations;
+			if (o->function_tolerance > 0)
+				so.function_tolerance = o->function_tolerance;
 			ceres::Solver::Summary sum;
 			ceres::Solve(so, &pb, &sum);
 			if (sum.termination_type == ceres::FAILURE)

@@ -45,6 +45,11 @@ struct mvod_ba_options {
 	 */
 	double huber;
 	int max_iterations;  /* Levenberg-Marquardt iterations */
+	/*
+	 * Levenberg-Marquardt also stops once a step changes the cost by less than this share
+	 * of it (Ceres's function_tolerance); 0: Ceres's default, 1e-6.
+	 */
+	double function_tolerance;
 	double chi2_outlier; /* squared residual in sigma units above which an observation is
 			      * flagged (5.991: 95 % of inliers with 1-sigma noise pass) */
 };
@@ -60,6 +65,7 @@ static inline void mvod_ba_options_default(struct mvod_ba_options *o)
 {
 	o->huber = 2.4477; /* sqrt(5.991) */
 	o->max_iterations = 10;
+	o->function_tolerance = 0;
 	o->chi2_outlier = 5.991;
 }
 

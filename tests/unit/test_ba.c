@@ -193,6 +193,44 @@ static void test_bad_problem(void **state)
 	win.obs[3].point = 0;
 	win.obs[3].sigma = 0;
 	assert_int_equal(mvod_ba_solve(*state, &p, &o, &r), -EINVAL);
+	win.obs[3].sigma = 1;
+	o.function_tolerance = -1e-4;
+	assert_int_equal(mvod_ba_solve(*state, &p, &o, &r), -EINVAL);
+}
+
+/*
+ * function_tolerance (map mode passes 1e-4): a window with noisy observations, so that the
+ * cost settles above 0, solved from the same start with Ceres's default (0: 1e-6) and with
+ * 1e-2. The looser one stops in fewer iterations (ignoring the option would make them equal)
+ * at a cost within 2 % of the default's: each step it skipped would have changed the cost by
+ * under 1 %, and Levenberg-Marquardt's steps shrink as it converges.
+ */
+static void test_function_tolerance(void **state)
+{
+	int it[2];
+	double cost[2];
+	for (int v = 0; v < 2; v++) {
+		make_window(200);
+		for (int i = 0; i < win.n_obs; i++) { /* +-0.5 px, a fixed pattern */
+			win.obs[i].u += i % 3 == 0 ? 0.5 : -0.25;
+			win.obs[i].v += i % 5 == 0 ? -0.5 : 0.125;
+		}
+		perturb(0.01, 0.1, 0.3);
+		struct mvod_ba_options o;
+		mvod_ba_options_default(&o);
+		o.max_iterations = 50;
+		o.function_tolerance = v ? 1e-2 : 0;
+		struct mvod_ba_problem p = problem();
+		struct mvod_ba_result r;
+		assert_int_equal(mvod_ba_solve(*state, &p, &o, &r), 0);
+		it[v] = r.iterations;
+		cost[v] = r.final_cost;
+	}
+	print_message("BA tolerance 1e-6: %d iterations, cost %.6g; 1e-2: %d, %.6g\n", it[0],
+		      cost[0], it[1], cost[1]);
+	assert_true(cost[0] > 0);
+	assert_true(it[1] < it[0]);
+	assert_true(cost[1] <= 1.02 * cost[0]);
 }
 
 /* The size of a KITTI window (7 keyframes, 2000 points): how long one solve takes. Printed,
@@ -300,6 +338,7 @@ int main(void)
 		cmocka_unit_test(test_recovers_window),
 		cmocka_unit_test(test_flags_outlier),
 		cmocka_unit_test(test_bad_problem),
+		cmocka_unit_test(test_function_tolerance),
 		cmocka_unit_test(test_kitti_sized_window),
 		cmocka_unit_test(test_thread_solves_as_inline),
 		cmocka_unit_test(test_jacobians_as_autodiff),
