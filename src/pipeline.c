@@ -271,8 +271,9 @@ static int open_inputs(struct run *r)
 	LOG(INFO, "front end: %s%s", mvod_frontend_names[r->sum->frontend],
 	    o->vo.frontend == MVOD_FRONTEND_AUTO ? " (--frontend auto)" : "");
 	/* Info, as the front end's choice: documented behaviour, not a fault (-q hides it). */
-	if (mvod_vo_map_missing(&o->vo))
-		LOG(INFO, "%s: running --mode twoview", mvod_vo_map_missing(&o->vo));
+	const char *no_map = mvod_vo_map_missing(&o->vo);
+	if (no_map)
+		LOG(INFO, "%s: running --mode twoview", no_map);
 	/*
 	 * A file or dataset is read as fast as it is processed, so waiting for bundle adjustment
 	 * costs no frame, and its result is then the same on every machine; on a live camera the

@@ -192,8 +192,8 @@ void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gat
 					.max_tilt_deg = MVOD_GROUND_MAX_TILT_DEG};
 }
 
-double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
-			      bool *used)
+double mvod_scale_filter_step_gain(struct mvod_scale_filter *f, double ratio, double quality,
+				   double gain, bool *used)
 {
 	*used = false;
 	if (f->since >= 0)
@@ -218,7 +218,13 @@ double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double 
 	f->since = 0;
 	f->quality = quality;
 	*used = true;
-	return first ? ratio : exp(f->gain * r);
+	return first ? ratio : exp(gain * r);
+}
+
+double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
+			      bool *used)
+{
+	return mvod_scale_filter_step_gain(f, ratio, quality, f->gain, used);
 }
 
 void mvod_scale_filter_motion(struct mvod_scale_filter *f, const double dir[3])

@@ -121,6 +121,9 @@ void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gat
  */
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
 			      bool *used);
+/* The same step with a gain of its own for this measurement instead of f->gain. */
+double mvod_scale_filter_step_gain(struct mvod_scale_filter *f, double ratio, double quality,
+				   double gain, bool *used);
 /*
  * Fewer ground points than this give no height: three points always span a plane, and a
  * patch of road under a car's bonnet on KITTI has 15-60 of them.

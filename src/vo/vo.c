@@ -100,8 +100,8 @@ bool mvod_vo_map_available(void)
 
 /*
  * Map mode is the default (issue 12): on KLT tracks it beats two-view on the KITTI clips with
- * --scale gt and free scale, and on mvod-synth's KITTI 00 drive with the camera's height
- * (t_rel 2.24 % against 9.01 %; BENCHMARKS.md). Where it cannot run (no Ceres, --scale
+ * --scale gt, free scale and the camera's height, and on mvod-synth's KITTI 00 drive with the
+ * camera's height (t_rel 2.05-2.76 % against 9.01 %; BENCHMARKS.md, the eighth merge). Where it cannot run (no Ceres, --scale
  * external) two-view does: mvod_vo_map_missing.
  */
 void mvod_vo_params_default(struct mvod_vo_params *p)
