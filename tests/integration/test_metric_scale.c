@@ -189,6 +189,64 @@ static void test_height_map(void **state)
 	assert_true(kf >= 8 && kf <= 30);
 }
 
+/*
+ * Map mode, --scale height, at 14.5 m/s in KITTI's field of view (mvod-synth forward at 640x192,
+ * fx 369; KITTI 06's car drives 1.45 m a frame): tracks leave the narrow image within a few
+ * frames and the map is lost and rebuilt again and again (3 times in these 60 frames). Every
+ * published step from the first metric one on is at least half the true one. While a new map
+ * waited for parallax its steps were held at zero, and with the reference moving on, their
+ * travel was lost for good: 3 zero steps here, 5.4 % of the path over 200 frames (mapping.c,
+ * hold_translation). Measured 0.99-1.07 of the truth, so half is far from both.
+ */
+static void test_height_map_fast(void **state)
+{
+	(void)state;
+	harness_need_map();
+	char fdir[240], street[3][300];
+	snprintf(fdir, sizeof(fdir), "%s/fast-street", harness_tmpdir());
+	harness_synth(fdir, "forward", FRAMES, "mkv", "--speed", "14.5", "--size", "640x192", "--fx",
+		      "369", NULL);
+	strcpy(street[0], video), strcpy(street[1], calib), strcpy(street[2], gt);
+	snprintf(video, sizeof(video), "file:%s/video.mkv", fdir);
+	snprintf(calib, sizeof(calib), "%s/calib.json", fdir);
+	snprintf(gt, sizeof(gt), "%s/gt.tum", fdir);
+	struct run_result r;
+	run_mvod(&r, "fast", "--scale", "height", "--camera-height", "1.6", "--mode", "map");
+	if (!r.exited || r.status != 0)
+		fail_msg("mvod failed (%d): %s", r.status, r.err);
+	static mvod_pose_t poses[FRAMES + 8];
+	char path[320];
+	snprintf(path, sizeof(path), "%s/fast.lcmlog", dir);
+	assert_int_equal(harness_poses(path, poses, FRAMES + 8), FRAMES);
+	double g[FRAMES][3], t;
+	FILE *f = fopen(gt, "r");
+	assert_non_null(f);
+	for (int i = 0; i < FRAMES; i++)
+		assert_int_equal(fscanf(f, "%lf %lf %lf %lf %*f %*f %*f %*f", &t, &g[i][0], &g[i][1],
+					&g[i][2]),
+				 4);
+	fclose(f);
+	/* Held at the origin until the first measurement, whose step jumps: checked after it. */
+	int moved = 0, checked = 0;
+	for (int i = 1; i < FRAMES; i++) {
+		double d = 0, dg = 0;
+		for (int k = 0; k < 3; k++) {
+			d += pow(poses[i].position[k] - poses[i - 1].position[k], 2);
+			dg += pow(g[i][k] - g[i - 1][k], 2);
+		}
+		if (!moved) {
+			moved = d > 0;
+			continue;
+		}
+		checked++;
+		if (!(sqrt(d) >= 0.5 * sqrt(dg)))
+			fail_msg("frame %d: step %.3f m, the truth's %.3f m", i, sqrt(d), sqrt(dg));
+	}
+	print_message("fast: %d steps checked\n", checked);
+	assert_true(checked > FRAMES / 2);
+	strcpy(video, street[0]), strcpy(calib, street[1]), strcpy(gt, street[2]);
+}
+
 static void test_external(void **state)
 {
 	(void)state;
@@ -328,6 +386,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_height),
 		cmocka_unit_test(test_height_map),
+		cmocka_unit_test(test_height_map_fast),
 		cmocka_unit_test(test_height_pitched),
 		cmocka_unit_test(test_external),
 		cmocka_unit_test(test_external_speed_stops),
