@@ -62,6 +62,13 @@ double mvod_rot_angle(const double R[9]);
 void mvod_rot_exp(const double w[3], double R[9]);
 /* Its inverse: the axis-angle vector (radians, |w| <= pi) of a rotation matrix. */
 void mvod_rot_log(const double R[9], double w[3]);
+/*
+ * R (in and out) brought back onto the rotations when it has left them by more than tol: the
+ * Frobenius norm of R^T R - I. Then R becomes the rotation of its quaternion (Shepperd's
+ * method reads it from R's largest diagonal combination, normalised). Returns whether R moved;
+ * within tol R is left bit for bit.
+ */
+bool mvod_rot_reorthonormalise(double R[9], double tol);
 /* Angle between two vectors in radians; 0 when either is zero. */
 double mvod_vec3_angle(const double a[3], const double b[3]);
 

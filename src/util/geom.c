@@ -214,6 +214,22 @@ void mvod_rot_log(const double R[9], double w[3])
 		w[k] = f * q[k + 1];
 }
 
+bool mvod_rot_reorthonormalise(double R[9], double tol)
+{
+	double e = 0;
+	for (int r = 0; r < 3; r++)
+		for (int c = 0; c < 3; c++) {
+			double d = R[r] * R[c] + R[3 + r] * R[3 + c] + R[6 + r] * R[6 + c] - (r == c);
+			e += d * d;
+		}
+	if (!(sqrt(e) > tol))
+		return false;
+	double q[4];
+	mvod_rot_to_quat(R, q);
+	mvod_quat_to_rot(q, R);
+	return true;
+}
+
 void mvod_vec3_cross(const double a[3], const double b[3], double out[3])
 {
 	out[0] = a[1] * b[2] - a[2] * b[1];

@@ -85,6 +85,21 @@
 #define ORB_EPI_GATE_SIGMA 2.0
 #define ORB_EPI_HUBER_SIGMA 1.0
 #define ORB_EPI_WEIGHT 0.5
+/*
+ * A tracked rotation farther than this from orthonormal (the Frobenius norm of R^T R - I) is
+ * brought back before it is published or predicts the next frame. The constant-velocity
+ * prediction multiplies the last two rotations (vR Rcw, vR = Rcw Rprev^T), so a departure
+ * grows about threefold a frame unless the refinement re-projects it, as OpenCV's
+ * solvePnPRefineLM does through Rodrigues. A refinement that updates R exp(d) without it
+ * (mapspeed2's PnP patch) grew it from 4e-15 to 3e-11 over KITTI 07's frames 3-12 and to 0.23
+ * by frame 41: the published pose was then no rotation (its inverse no longer its transpose),
+ * and after the loss at frame 41, of the 105 two-view steps that passed the new map's gates
+ * not one of their 106-291 well-triangulated points reprojected into its first keyframe
+ * (mapping.c, init_points): frames without a map 121 of 160 (--scale gt; auto 130), 2 with
+ * this. Without that patch the rotations stay within 2e-15 (KITTI 06, 07 clips, both front
+ * ends; mvod-synth paths), which this leaves bit for bit.
+ */
+#define ROT_ORTHO_TOL 1e-9
 /* Chi-square gate (2 dof, 95 %) on a reprojection error in sigma units, as the shims use. */
 double mvod_mapvo_sigma(int octave)
 {
@@ -600,6 +615,7 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 		mv->lost = true;
 		return 0;
 	}
+	mvod_rot_reorthonormalise(R, ROT_ORTHO_TOL);
 	ret = accept(vo, np, mv->n_pairs, R, t, gt, res);
 	return ret ? ret : 1;
 }
