@@ -561,11 +561,14 @@ static void feed_speed(struct run *r, const struct mvod_frame *f)
 	bool stale = mvod_speed_odometer(r->speed, f->utime, &odo) != 0;
 	mvod_vo_set_odometer(r->vo, stale ? NAN : odo);
 	log_refused_speed(r);
+	bool map = mvod_vo_run_mode(&r->o->vo) == MVOD_VO_MAP;
 	if (stale && !r->speed_stale)
-		LOG(WARN, "frame %lld (t = %.6f s): no mvod.speed_t on %s within %.1f s: steps keep "
-			  "the last scale from structure (scale source \"structure\", confidence "
-			  "falling) until speed arrives", (long long)f->index, f->utime / 1e6,
-		    r->o->speed_channel, MVOD_SPEED_STALE_US / 1e6);
+		LOG(WARN, "frame %lld (t = %.6f s): no mvod.speed_t on %s within %.1f s: %s until "
+			  "speed arrives", (long long)f->index, f->utime / 1e6, r->o->speed_channel,
+		    MVOD_SPEED_STALE_US / 1e6,
+		    map ? "the map keeps its last scale (scale source \"map\", confidence falling)"
+			: "steps keep the last scale from structure (scale source \"structure\", "
+			  "confidence falling)");
 	if (!stale && r->speed_stale)
 		LOG(INFO, "frame %lld: speed on %s again", (long long)f->index, r->o->speed_channel);
 	r->speed_stale = stale;

@@ -183,8 +183,8 @@ extern const char *const mvod_vo_descriptor_flags[];
  */
 enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p);
 /*
- * Why map mode, asked for by p, cannot run: built without Ceres, or --scale external (map
- * mode does not fuse the odometer yet); NULL when it can, or when p asks for two-view.
+ * Why map mode, asked for by p, cannot run: built without Ceres; NULL when it can, or when p
+ * asks for two-view.
  */
 const char *mvod_vo_map_missing(const struct mvod_vo_params *p);
 /*
@@ -277,7 +277,8 @@ void mvod_vo_restart(struct mvod_vo *vo);
 /*
  * --scale external: the distance the robot travelled (metres, from any origin) at the time of
  * the next frame given to mvod_vo_process, NAN when unknown (speed stale or missing: the
- * scale then carries on from structure, its confidence decaying). Does not allocate.
+ * scale then carries on from structure in two-view mode, as the map's own unit in map mode,
+ * its confidence decaying). Does not allocate.
  */
 void mvod_vo_set_odometer(struct mvod_vo *vo, double metres);
 

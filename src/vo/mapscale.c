@@ -1,10 +1,11 @@
 /*
- * Map mode's metric scale (--scale height): at a keyframe, the camera's height over the road
- * band: with KLT over the band's tracks from the last frame triangulated with the map's step
- * (pair_ratio), with ORB among the window's map points (band_ratio); filtered as two-view
- * mode's steps are
- * (scale.h), and, when the filtered estimate says the map's unit has drifted, the whole map
- * rescaled about the current camera. Bundle adjustment is landed first: a solve posted
+ * Map mode's metric scale: at a keyframe, with --scale height the camera's height over the
+ * road band: with KLT over the band's tracks from the last frame triangulated with the map's
+ * step (pair_ratio), with ORB among the window's map points (band_ratio); with --scale
+ * external the odometer's distance over the map's own path since the last measurement
+ * (odo_ratio, summed frame by frame: mvod_mapscale_frame); filtered as two-view mode's steps
+ * are (scale.h), and, when the filtered estimate says the map's unit has drifted, the whole
+ * map rescaled about the current camera. Bundle adjustment is landed first: a solve posted
  * before the rescale would bring back the old unit when it lands.
  */
 #include "mapvo.h"
@@ -56,6 +57,22 @@
  * with BA's function tolerance (mapping_ba.c) at 0.25: 2.76 / 2.52 / 2.05 %.
  */
 #define PAIR_GAIN 0.25
+/*
+ * --scale external: the keyframe's ratio (the odometer's distance over the map's path since
+ * the last measurement) is taken whole: it spans every frame since, so one frame's odometer
+ * noise is averaged already. KITTI clips, exact speed / speed with 5 % noise a sample, map
+ * klt SE(3) ATE 06 and 07: gain 0.25 0.057 / 0.120, 0.175 / 0.244 m; 0.5 0.051 / 0.104,
+ * 0.121 / 0.248; 0.75 0.039 / 0.100, 0.114 / 0.266; 1 0.037 / 0.099, 0.087 / 0.267 (orb:
+ * 1 the best in every column). A ratio more than EXT_GATE (log) from the map's unit is
+ * refused, the gate doubling with each refusal in a row (scale.h): a wheel slipping, or a
+ * stretch of bad odometry, moves the map by at most 25 % once. The map is rescaled when 0.5 %
+ * off (2 %: 07 0.207 m; every keyframe: 0.084 m), with no bounded gain: the odometer has no
+ * scene bias (height's turns) to guard against, and MAP_RESCALE_CAP cost 07 0.087 -> 0.165 m
+ * (0.267 -> 0.330 m with noise).
+ */
+#define EXT_GAIN 1.0
+#define EXT_GATE 0.22 /* log(1.25), as two-view's height gate */
+#define EXT_RESCALE_MIN 0.005
 
 /*
  * The map's points that lie on the road band as keyframe k sees it (projected into the band's
@@ -155,38 +172,66 @@ static int rescale(struct mvod_vo *vo, const double c[3], double s)
 	return 0;
 }
 
-int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf)
+enum mvod_scale_source mvod_mapscale_frame(struct mvod_vo *vo)
 {
 	struct mvod_mapvo *mv = vo->mapvo;
-	if (vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT)
-		return 0;
-	int ret = mvod_mapping_ba_settle(mv);
+	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT)
+		return MVOD_SCALE_GROUND_TRUTH;
+	if (vo->p.scale_mode != MVOD_SCALE_MODE_EXTERNAL)
+		return MVOD_SCALE_MAP;
+	if (!isfinite(vo->cur->odo)) {
+		bool used;
+		mvod_scale_filter_step(&vo->scale, NAN, 0, &used); /* confidence decays */
+		return MVOD_SCALE_MAP;
+	}
+	double d = vo->cur->odo - vo->ref->odo;
+	if (d > 0) {
+		mv->odo_path += d;
+		mv->map_path += sqrt(mv->vt[0] * mv->vt[0] + mv->vt[1] * mv->vt[1] +
+				     mv->vt[2] * mv->vt[2]);
+	}
+	return MVOD_SCALE_EXTERNAL;
+}
+
+/* --scale external: metres per map unit over the path since the last one; NAN without. */
+static double odo_ratio(struct mvod_mapvo *mv)
+{
+	if (!(mv->odo_path > 0 && mv->map_path > 0))
+		return NAN;
+	double r = mv->odo_path / mv->map_path;
 	/*
-	 * The last frame's direction of travel (its camera centre from the frame before's: -vt
-	 * in its frame) levels the expected ground normal (scale.h). On mvod-synth's KITTI 00
-	 * drive, whose ground follows the path, the normal learnt from the ground fits alone
-	 * pitched 2.15 deg (median, frames 0-1500) where the camera is pitched 0.88 deg to the
-	 * road: the heights ran 5-9 % high. Levelled with the motion: 0.86 deg.
+	 * Sums from zero at each measurement: kept instead at half or 0.8 of their value (a
+	 * longer, exponentially weighted path) cost every clip, exact speed or noisy (KITTI 07
+	 * KLT 0.087 -> 0.100 / 0.135 m, with noise 0.267 -> 0.299 / 0.357 m): the map's unit
+	 * moves between keyframes, and the older path measures the unit it had then.
 	 */
-	double back[3] = {-mv->vt[0], -mv->vt[1], -mv->vt[2]};
-	mvod_scale_filter_motion(&vo->scale, back);
-	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);
-	if (ret || !k)
-		return ret;
-	double q, r = vo->klt ? pair_ratio(vo, &q) : band_ratio(vo, k, &q);
+	mv->odo_path = mv->map_path = 0;
+	return r;
+}
+
+/*
+ * Measurement r (metres per map unit, NAN: none) of quality q into the filter; the map
+ * rescaled when the filtered unit is off by enough (height: within the bounded gain).
+ */
+static int apply(struct mvod_vo *vo, double r, double q)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	bool external = vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL;
+	double gain = external ? EXT_GAIN : vo->klt ? PAIR_GAIN : vo->scale.gain;
+	double gate = external ? EXT_GATE : vo->scale.gate;
 	bool used, was_metric = mvod_scale_filter_metric(&vo->scale);
-	double gain = vo->klt ? PAIR_GAIN : vo->scale.gain;
 	mv->unit_log += log(mvod_scale_filter_step_gain(&vo->scale, r / exp(mv->unit_log), q, gain,
-							&used));
+							gate, &used));
 	double *slot = NULL;
 	if (was_metric) {
 		slot = mv->rescale_log + mv->kf_scaled++ % MVOD_MAPSCALE_WINDOW;
 		*slot = 0;
 	}
 	mv->n_measured += used;
-	if (!used || (was_metric && fabs(mv->unit_log) < MAP_RESCALE_MIN))
+	double min = external ? EXT_RESCALE_MIN : MAP_RESCALE_MIN;
+	if (!used || (was_metric && fabs(mv->unit_log) < min))
 		return 0;
-	if (slot && mv->n_measured > MVOD_MAPSCALE_WINDOW) {
+	if (slot && !external && mv->n_measured > MVOD_MAPSCALE_WINDOW) {
 		mv->unit_log = mvod_scale_bounded(mv->rescale_log, MVOD_MAPSCALE_WINDOW,
 						  mv->unit_log, MAP_RESCALE_CAP);
 		if (mv->unit_log == 0)
@@ -203,4 +248,34 @@ int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf)
 	if (was_metric)
 		memcpy(c, vo->pose.t, sizeof(c));
 	return rescale(vo, c, exp(mv->unit_log));
+}
+
+int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf)
+{
+	struct mvod_mapvo *mv = vo->mapvo;
+	bool external = vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL;
+	if (vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT && !external)
+		return 0;
+	int ret = mvod_mapping_ba_settle(mv);
+	if (ret)
+		return ret;
+	if (external) {
+		double r = odo_ratio(mv);
+		/* Standing, or no speed: nothing measured, the map keeps its unit. */
+		return isnan(r) ? 0 : apply(vo, r, 1.0);
+	}
+	/*
+	 * The last frame's direction of travel (its camera centre from the frame before's: -vt
+	 * in its frame) levels the expected ground normal (scale.h). On mvod-synth's KITTI 00
+	 * drive, whose ground follows the path, the normal learnt from the ground fits alone
+	 * pitched 2.15 deg (median, frames 0-1500) where the camera is pitched 0.88 deg to the
+	 * road: the heights ran 5-9 % high. Levelled with the motion: 0.86 deg.
+	 */
+	double back[3] = {-mv->vt[0], -mv->vt[1], -mv->vt[2]};
+	mvod_scale_filter_motion(&vo->scale, back);
+	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);
+	if (!k)
+		return 0;
+	double q, r = vo->klt ? pair_ratio(vo, &q) : band_ratio(vo, k, &q);
+	return apply(vo, r, q);
 }

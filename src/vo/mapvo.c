@@ -210,6 +210,7 @@ void mvod_mapvo_reset(struct mvod_mapvo *mv)
 	mv->active = false;
 	mv->lost = false;
 	mv->unit_log = 0;
+	mv->odo_path = mv->map_path = 0;
 }
 
 /* The VO's keypoints in the map's form. */
@@ -423,6 +424,7 @@ static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const do
 	struct mvod_pose before = vo->pose;
 	publish(vo, R, t, gt);
 	set_pose(mv, R, t);
+	enum mvod_scale_source src = mvod_mapscale_frame(vo);
 	mv->since_kf++;
 	if (kf_due(vo, k, inliers, R, t)) {
 		int ret = mvod_mapping_keyframe(vo, &res->keyframe);
@@ -433,8 +435,7 @@ static int accept(struct mvod_vo *vo, int np, int k, const double R[9], const do
 	if (!res->matches) /* re-finding reports its descriptor matches */
 		res->matches = k;
 	res->inliers = inliers;
-	res->scale_source = vo->p.scale_mode == MVOD_SCALE_MODE_GT ? MVOD_SCALE_GROUND_TRUTH
-								   : MVOD_SCALE_MAP;
+	res->scale_source = src;
 	res->step_m = mvod_vec3_dist(before.t, vo->pose.t);
 	if (res->step_m > 0) {
 		vo->last_step = res->step_m; /* the scale a re-initialisation carries */

@@ -86,6 +86,11 @@ struct mvod_mapvo {
 	double rescale_log[MVOD_MAPSCALE_WINDOW];
 	uint64_t kf_scaled;
 	int n_measured;
+	/*
+	 * --scale external: over the tracked frames since the last measurement that the
+	 * odometer says moved, its distance (metres) and the map's steps (|vt|, map units).
+	 */
+	double odo_path, map_path;
 };
 
 /*
@@ -153,13 +158,22 @@ int mvod_mapping_ba_poll(struct mvod_mapvo *mv);
 int mvod_mapping_ba_settle(struct mvod_mapvo *mv);
 
 /*
- * --scale height (mapscale.c), at keyframe kf, after its triangulation and before bundle
- * adjustment: lands any running bundle adjustment, measures the camera's height over the road
- * band among the map's points that project into it from kf and, when the filtered scale says the map's unit has
- * drifted, rescales the map about the current camera (about the origin at the first
- * measurement). 0 or -errno.
+ * --scale height and external (mapscale.c), at keyframe kf, after its triangulation and
+ * before bundle adjustment: lands any running bundle adjustment, measures the map's unit
+ * (height: the camera's height over the road band from kf; external: the odometer's distance
+ * over the map's path since the last measurement) and, when the filtered scale says the
+ * map's unit has drifted, rescales the map about the current camera (about the origin at the
+ * first measurement). 0 or -errno.
  */
 int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf);
+/*
+ * --scale external, each frame tracked against the map (after its pose and velocity are
+ * set): the step from the last frame into the odometer's and the map's path when the
+ * odometer says the robot moved (a standstill measures nothing); without speed at this
+ * frame, the scale's confidence decays a step. Returns the frame's scale source: external
+ * when the frame has speed, else map (the map keeps the last scale).
+ */
+enum mvod_scale_source mvod_mapscale_frame(struct mvod_vo *vo);
 
 /* Pixel sigma of a keypoint on pyramid level octave: ORB's scale step 1.2 per level. */
 double mvod_mapvo_sigma(int octave);

@@ -193,7 +193,7 @@ void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gat
 }
 
 double mvod_scale_filter_step_gain(struct mvod_scale_filter *f, double ratio, double quality,
-				   double gain, bool *used)
+				   double gain, double gate, bool *used)
 {
 	*used = false;
 	if (f->since >= 0)
@@ -210,7 +210,7 @@ double mvod_scale_filter_step_gain(struct mvod_scale_filter *f, double ratio, do
 	double r = log(ratio);
 	/* Doubling: a scale that structure ran away with (1e13 on mvod-synth's 3.7 km KITTI 00
 	 * path at a linear widening) is caught within a few dozen refusals. */
-	if (!first && fabs(r) > ldexp(f->gate, f->refused < 60 ? f->refused : 60)) {
+	if (!first && fabs(r) > ldexp(gate, f->refused < 60 ? f->refused : 60)) {
 		f->refused++;
 		return 1.0;
 	}
@@ -224,7 +224,7 @@ double mvod_scale_filter_step_gain(struct mvod_scale_filter *f, double ratio, do
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
 			      bool *used)
 {
-	return mvod_scale_filter_step_gain(f, ratio, quality, f->gain, used);
+	return mvod_scale_filter_step_gain(f, ratio, quality, f->gain, f->gate, used);
 }
 
 void mvod_scale_filter_motion(struct mvod_scale_filter *f, const double dir[3])

@@ -121,9 +121,12 @@ void mvod_scale_filter_init(struct mvod_scale_filter *f, double gain, double gat
  */
 double mvod_scale_filter_step(struct mvod_scale_filter *f, double ratio, double quality,
 			      bool *used);
-/* The same step with a gain of its own for this measurement instead of f->gain. */
+/*
+ * The same step with a gain and a gate of its own for this measurement instead of f->gain and
+ * f->gate (map mode's: mapscale.c); the gate still doubles with each refusal in a row.
+ */
 double mvod_scale_filter_step_gain(struct mvod_scale_filter *f, double ratio, double quality,
-				   double gain, bool *used);
+				   double gain, double gate, bool *used);
 /*
  * Fewer ground points than this give no height: three points always span a plane, and a
  * patch of road under a car's bonnet on KITTI has 15-60 of them.

@@ -247,52 +247,170 @@ static void test_height_map_fast(void **state)
 	strcpy(video, street[0]), strcpy(calib, street[1]), strcpy(gt, street[2]);
 }
 
+/* mkspeedlog's exact speed of the street at speed.lcmlog; its file:// URL into url. */
+static void exact_speed(char *url, size_t len)
+{
+	char log[300];
+	snprintf(log, sizeof(log), "%s/speed.lcmlog", dir);
+	snprintf(url, len, "file://%s?mode=r", log);
+	speed_log(log, NULL);
+}
+
+/*
+ * Map mode, the default: the map's unit from the odometer's distance over the map's path at
+ * each keyframe (mapscale.c). Measured: 0.09 % (0.010 m over 11.8 m); 0.25 % for a map that
+ * keeps the unit of its first two-view step (itself the odometer's): on this short street
+ * the bound is the issue's, and test_external_speed_late is the one a map that does not
+ * fuse the speed fails.
+ */
 static void test_external(void **state)
 {
 	(void)state;
-	char log[300], url[320];
-	snprintf(log, sizeof(log), "%s/speed.lcmlog", dir);
-	snprintf(url, sizeof(url), "file://%s?mode=r", log);
-	speed_log(log, NULL);
+	char url[320];
+	exact_speed(url, sizeof(url));
 	struct run_result r;
 	struct traj_errors e;
 	run_mvod(&r, "external", "--scale", "external", "--speed-url", url, NULL, NULL);
 	metric_errors(&r, "external", &e);
-	/*
-	 * The default, map mode, does not fuse the speed yet: two-view runs, and says so (without
-	 * Ceres the missing Ceres is the reason given).
-	 */
-	assert_non_null(strstr(r.err, harness_have_ceres()
-					      ? "(--scale external) yet: running --mode twoview"
-					      : "running --mode twoview"));
+	/* Map mode runs (without Ceres two-view does, and says so). */
+	assert_true(harness_have_ceres() == !strstr(r.err, "running --mode twoview"));
 	assert_true(e.ate_m < 0.01 * e.length_m);
 	assert_true(count_source("external", MVOD_POSE_T_SCALE_EXTERNAL) > FRAMES * 3 / 4);
 }
 
-/*
- * Speed for the first 30 frames only: from then on the steps keep the last scale from
- * structure, the poses say so (scale source structure), the log says why once, and the path
- * stays metric to within what structure drifts over 30 frames.
- */
-static void test_external_speed_stops(void **state)
+/* Two-view mode: each step is the odometer's difference. Measured 0.04 % (0.005 m). */
+static void test_external_twoview(void **state)
 {
 	(void)state;
+	char url[320];
+	exact_speed(url, sizeof(url));
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "external2", "--scale", "external", "--speed-url", url, "--mode", "twoview");
+	metric_errors(&r, "external2", &e);
+	assert_true(e.ate_m < 0.01 * e.length_m);
+	assert_true(count_source("external2", MVOD_POSE_T_SCALE_EXTERNAL) > FRAMES * 3 / 4);
+}
+
+/*
+ * Speed for the first 30 frames only, in mode (NULL: the default, map): from then on the
+ * steps keep the last scale (two-view: from structure, map mode: the map's own unit), the
+ * poses say so (scale source src), the log says why once (with needle), and the path stays
+ * metric to within what the scale drifts over 30 frames (bound: fraction of the path).
+ */
+static void speed_stops(const char *name, const char *mode, int src, const char *needle,
+			double bound)
+{
 	char log[300], url[320];
 	snprintf(log, sizeof(log), "%s/speed30.lcmlog", dir);
 	snprintf(url, sizeof(url), "file://%s?mode=r", log);
 	speed_log(log, "--samples", "30", "--no-distance", NULL);
 	struct run_result r;
 	struct traj_errors e;
-	run_mvod(&r, "stops", "--scale", "external", "--speed-url", url, NULL, NULL);
-	metric_errors(&r, "stops", &e);
+	run_mvod(&r, name, "--scale", "external", "--speed-url", url, mode ? "--mode" : NULL,
+		 mode);
+	metric_errors(&r, name, &e);
 	assert_non_null(strstr(r.err, "no mvod.speed_t on MVOD_SPEED"));
-	int ext = count_source("stops", MVOD_POSE_T_SCALE_EXTERNAL);
-	int str = count_source("stops", MVOD_POSE_T_SCALE_STRUCTURE);
+	assert_non_null(strstr(r.err, needle));
+	int ext = count_source(name, MVOD_POSE_T_SCALE_EXTERNAL);
+	int kept = count_source(name, src);
 	/* Frames 31-35 still extrapolate the last speed (within MVOD_SPEED_STALE_US). */
 	assert_true(ext > 20 && ext <= 35);
-	assert_true(str >= 20);
-	/* Measured 5.6 %: structure alone drifts over the second half at 0.2 m a step. */
-	assert_true(e.ate_m < 0.11 * e.length_m);
+	assert_true(kept >= 20);
+	assert_true(e.ate_m < bound * e.length_m);
+}
+
+/*
+ * Two-view: measured 0.08 % (5.6 % before KLT and the held start), structure alone carrying
+ * the scale over the second half at 0.2 m a step. Map mode: measured 0.13 %, the map carrying
+ * its unit; 2 % keeps the issue's bound for a metric path with margin.
+ */
+static void test_external_speed_stops(void **state)
+{
+	(void)state;
+	speed_stops("stops", "twoview", MVOD_POSE_T_SCALE_STRUCTURE, "scale from structure", 0.11);
+	if (harness_have_ceres())
+		speed_stops("stopsmap", NULL, MVOD_POSE_T_SCALE_MAP, "the map keeps its last scale",
+			    0.02);
+}
+
+/*
+ * Speed that starts arriving at frame 30 (the robot's odometry started after mvod), map mode:
+ * the map is built in the unit of its first step and the output held at the origin (scale
+ * source none) until the first keyframe with speed, whose ratio makes the map metric at once
+ * (rescaled about the origin); from then on the poses say external (31 of 60 measured), and
+ * the distance from the start to the last frame is the truth's within 2 % (measured 0.08 %). A map mode that
+ * did not fuse the speed would never publish a metric position (none external).
+ */
+static void test_external_speed_late(void **state)
+{
+	(void)state;
+	harness_need_map();
+	char log[300], url[320], path[320], err[256];
+	snprintf(log, sizeof(log), "%s/speedlate.lcmlog", dir);
+	snprintf(url, sizeof(url), "file://%s?mode=r", log);
+	speed_log(log, "--from", "30", NULL);
+	struct run_result r;
+	run_mvod(&r, "late", "--scale", "external", "--speed-url", url, NULL, NULL);
+	if (!r.exited || r.status != 0)
+		fail_msg("mvod failed (%d): %s", r.status, r.err);
+	int ext = count_source("late", MVOD_POSE_T_SCALE_EXTERNAL);
+	static mvod_pose_t poses[FRAMES + 8];
+	snprintf(path, sizeof(path), "%s/late.lcmlog", dir);
+	assert_int_equal(harness_poses(path, poses, FRAMES + 8), FRAMES);
+	struct mvod_traj t;
+	assert_int_equal(mvod_traj_load(gt, &t, err, sizeof(err)), 0);
+	assert_int_equal(t.n, FRAMES);
+	double de = 0, dg = 0;
+	for (int k = 0; k < 3; k++) {
+		double e = poses[FRAMES - 1].position[k] - poses[0].position[k];
+		double g = t.pose[FRAMES - 1].t[k] - t.pose[0].t[k];
+		de += e * e;
+		dg += g * g;
+	}
+	mvod_traj_free(&t);
+	print_message("late: %d external, distance %.3f m of %.3f m\n", ext, sqrt(de), sqrt(dg));
+	assert_true(ext >= 20);
+	assert_true(fabs(sqrt(de) / sqrt(dg) - 1) < 0.02);
+}
+
+/*
+ * mvod-synth's stop-go path (braking to a standstill at 40 % of the time, standing until 50 %,
+ * pulling away) with its exact speed, map mode: the frames standing measure nothing (the
+ * odometer's zero distance rescales no map), the position stands within 1 cm (measured
+ * 0.8 mm), and the path is metric within 1 %: measured 0.15 %.
+ */
+static void test_external_stop_go(void **state)
+{
+	(void)state;
+	harness_need_map();
+	char sdir[240], log[300], url[320], street[3][300];
+	strcpy(street[0], video), strcpy(street[1], calib), strcpy(street[2], gt);
+	snprintf(sdir, sizeof(sdir), "%s/stop-go", harness_tmpdir());
+	harness_synth(sdir, "stop-go", FRAMES, "mkv", "--speed", "2", NULL);
+	snprintf(video, sizeof(video), "file:%s/video.mkv", sdir);
+	snprintf(calib, sizeof(calib), "%s/calib.json", sdir);
+	snprintf(gt, sizeof(gt), "%s/gt.tum", sdir);
+	snprintf(log, sizeof(log), "%s/speed.lcmlog", sdir);
+	snprintf(url, sizeof(url), "file://%s?mode=r", log);
+	speed_log(log, NULL);
+	struct run_result r;
+	struct traj_errors e;
+	run_mvod(&r, "stopgo", "--scale", "external", "--speed-url", url, NULL, NULL);
+	metric_errors(&r, "stopgo", &e);
+	static mvod_pose_t poses[FRAMES + 8];
+	char path[320];
+	snprintf(path, sizeof(path), "%s/stopgo.lcmlog", dir);
+	assert_int_equal(harness_poses(path, poses, FRAMES + 8), FRAMES);
+	/* Frames 24-29 of 60 (times 2.4-2.9 s of 5.9) stand at the frame 24's position. */
+	double still = 0;
+	for (int i = 25; i < 30; i++)
+		for (int k = 0; k < 3; k++)
+			still = fmax(still, fabs(poses[i].position[k] - poses[24].position[k]));
+	print_message("stopgo: standing within %.4f m\n", still);
+	assert_true(still < 0.01);
+	assert_true(e.ate_m < 0.01 * e.length_m);
+	strcpy(video, street[0]), strcpy(calib, street[1]), strcpy(gt, street[2]);
 }
 
 /* mvod exits with status, and its stderr holds needle. */
@@ -389,7 +507,10 @@ int main(void)
 		cmocka_unit_test(test_height_map_fast),
 		cmocka_unit_test(test_height_pitched),
 		cmocka_unit_test(test_external),
+		cmocka_unit_test(test_external_twoview),
 		cmocka_unit_test(test_external_speed_stops),
+		cmocka_unit_test(test_external_speed_late),
+		cmocka_unit_test(test_external_stop_go),
 		cmocka_unit_test(test_bad_heights),
 		cmocka_unit_test(test_bad_speed_sources),
 		cmocka_unit_test(test_bad_speed_messages),
