@@ -50,6 +50,11 @@ struct mvod_ba_options {
 	 * of it (Ceres's function_tolerance); 0: Ceres's default, 1e-6.
 	 */
 	double function_tolerance;
+	/*
+	 * Who solves in mvod_ba_thread (ba_thread.h): false Ceres (mvod_ba_solve), true
+	 * ba_lm.c's own Levenberg-Marquardt (mvod_ba_lm_solve). mvod_ba_solve ignores it.
+	 */
+	bool own_solver;
 	double chi2_outlier; /* squared residual in sigma units above which an observation is
 			      * flagged (5.991: 95 % of inliers with 1-sigma noise pass) */
 };
@@ -67,6 +72,7 @@ static inline void mvod_ba_options_default(struct mvod_ba_options *o)
 	o->max_iterations = 10;
 	o->function_tolerance = 0;
 	o->chi2_outlier = 5.991;
+	o->own_solver = false;
 }
 
 /* Whether bundle adjustment is built in (Ceres); without it vo.c runs map mode as two-view. */

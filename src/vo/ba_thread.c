@@ -1,5 +1,7 @@
 #include "ba_thread.h"
 
+#include "ba_lm.h"
+
 #include <errno.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -8,7 +10,8 @@
 enum job_state { JOB_FREE, JOB_POSTED, JOB_DONE };
 
 struct mvod_ba_thread {
-	struct mvod_ba *ba; /* used by the BA thread only */
+	struct mvod_ba *ba;    /* used by the BA thread only */
+	struct mvod_ba_lm *lm; /* ditto */
 	struct mvod_ba_job job;
 	pthread_t thread;
 	pthread_mutex_t lock;
@@ -29,7 +32,8 @@ static void *run(void *arg)
 			break;
 		pthread_mutex_unlock(&t->lock);
 		struct mvod_ba_job *j = &t->job;
-		j->ret = mvod_ba_solve(t->ba, &j->p, &j->o, &j->r);
+		j->ret = j->o.own_solver ? mvod_ba_lm_solve(t->lm, &j->p, &j->o, &j->r)
+					 : mvod_ba_solve(t->ba, &j->p, &j->o, &j->r);
 		pthread_mutex_lock(&t->lock);
 		t->state = JOB_DONE;
 		pthread_cond_broadcast(&t->changed);
@@ -67,6 +71,8 @@ int mvod_ba_thread_create(int kf_cap, int point_cap, struct mvod_ba_thread **out
 	if (!ret)
 		ret = alloc_job(&t->job, kf_cap, point_cap);
 	if (!ret)
+		ret = mvod_ba_lm_create(kf_cap, point_cap, kf_cap * point_cap, &t->lm);
+	if (!ret)
 		ret = -pthread_create(&t->thread, NULL, run, t);
 	t->started = !ret;
 	if (ret) {
@@ -101,6 +107,7 @@ void mvod_ba_thread_destroy(struct mvod_ba_thread *t)
 	pthread_cond_destroy(&t->changed);
 	pthread_mutex_destroy(&t->lock);
 	mvod_ba_destroy(t->ba);
+	mvod_ba_lm_destroy(t->lm);
 	struct mvod_ba_job *j = &t->job;
 	void *arrays[] = {j->poses, j->points, j->fixed, j->obs, j->outlier, j->kf, j->pt,
 			  j->obs_kf};

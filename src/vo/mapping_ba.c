@@ -21,6 +21,14 @@
  * 1.087).
  */
 #define BA_FUNCTION_TOLERANCE 1e-4
+/*
+ * Solved by ba_lm.c's Levenberg-Marquardt, not Ceres: the same steps (unit/ba compares them;
+ * the KITTI clip table is unchanged, every map trajectory within 1e-7 m of Ceres's but 07 orb
+ * auto's, 2e-5 m, and KITTI 00's free-scale t_rel is Ceres's 4.20 / 3.01 / 4.68 %) for about a
+ * third of the instructions: KITTI 06 (callgrind, --scale gt) 92.3e6 -> 85.1e6 a frame,
+ * two-view 83.7e6 (BENCHMARKS.md, mapspeed3).
+ */
+#define BA_OWN_SOLVER true
 
 /* Index of kf among the window's keyframes (mv->kfs, nk of them), or -1. */
 static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
@@ -81,6 +89,7 @@ static void snapshot(struct mvod_mapvo *mv, int nk, struct mvod_ba_job *j)
 	mvod_ba_options_default(&j->o);
 	j->o.max_iterations = BA_ITERATIONS;
 	j->o.function_tolerance = BA_FUNCTION_TOLERANCE;
+	j->o.own_solver = BA_OWN_SOLVER;
 }
 
 /* A keyframe's camera-from-world pose before (Rk, tk) and after (R, t) bundle adjustment. */

@@ -16,6 +16,7 @@
 #include <cmocka.h>
 
 #include "scene.h"
+#include "vo/ba_lm.h"
 #include "vo/ba_shim.h"
 #include "vo/ba_thread.h"
 
@@ -290,6 +291,23 @@ static void test_thread_solves_as_inline(void **state)
 	assert_int_equal(j->r.iterations, r.iterations);
 	assert_memory_equal(j->poses, win.poses, sizeof(win.poses));
 	assert_memory_equal(j->points, win.pts, sizeof(double) * 3 * win.n_pts);
+	/* With own_solver the thread solves by ba_lm.c, bit for bit as inline. */
+	perturb(0.01, 0.1, 0.3);
+	j = mvod_ba_thread_job(t);
+	memcpy(j->poses, win.poses, sizeof(win.poses));
+	memcpy(j->points, win.pts, sizeof(double) * 3 * win.n_pts);
+	j->o.own_solver = true;
+	mvod_ba_thread_post(t);
+	assert_true(mvod_ba_thread_take(t, true, &done));
+	struct mvod_ba_lm *lm;
+	assert_int_equal(mvod_ba_lm_create(POSES, MAX_PTS, MAX_OBS, &lm), 0);
+	p = problem();
+	assert_int_equal(mvod_ba_lm_solve(lm, &p, &j->o, &r), 0);
+	mvod_ba_lm_destroy(lm);
+	assert_int_equal(j->ret, 0);
+	assert_int_equal(j->r.iterations, r.iterations);
+	assert_memory_equal(j->poses, win.poses, sizeof(win.poses));
+	assert_memory_equal(j->points, win.pts, sizeof(double) * 3 * win.n_pts);
 	/* Posted and not taken: destroy waits for the solve and stops the thread. */
 	mvod_ba_thread_post(t);
 	mvod_ba_thread_destroy(t);
@@ -332,6 +350,110 @@ static void test_jacobians_as_autodiff(void **state)
 	assert_true(evaluated > cases / 2 && evaluated < cases);
 }
 
+/*
+ * ba_lm.c's own Levenberg-Marquardt (map mode's solver) against Ceres from the same start:
+ * the same steps, so the same iterations, flags and, to rounding, the same solution. Three
+ * windows: exact observations with a large start error and 50 iterations (test_recovers_window's);
+ * noisy observations with map mode's options (5 iterations, function tolerance 1e-4), where the
+ * solvers stop short of the minimum, so that a different step rule or damping shows; and a
+ * 25 px outlier (Huber's linear part, then flagged). The arithmetic is Ceres's in another
+ * order (a rotation matrix per pose instead of Rodrigues per point, another Schur
+ * elimination), so the solutions differ by rounding carried through a few steps: measured
+ * 4e-15 pose and 4e-12 point (points 40 units away are the least constrained), costs equal
+ * to 1e-16 relative (1e-21 absolute at window 0's 2e-15). The bounds, 1e-12 / 1e-9 and 1e-9
+ * relative cost, are about 1000 times that, and far below what a different step would
+ * change (the first step moves poses by about 1e-2 here).
+ */
+static void test_own_solver_as_ceres(void **state)
+{
+	struct mvod_ba_lm *lm;
+	assert_int_equal(mvod_ba_lm_create(POSES, MAX_PTS, MAX_OBS, &lm), 0);
+	static double start_poses[POSES * 6], start_pts[MAX_PTS * 3], c_poses[POSES * 6],
+		c_pts[MAX_PTS * 3];
+	static uint8_t c_out[MAX_OBS];
+	for (int v = 0; v < 3; v++) {
+		make_window(200);
+		struct mvod_ba_options o;
+		mvod_ba_options_default(&o);
+		o.max_iterations = 50;
+		if (v == 1) {
+			for (int i = 0; i < win.n_obs; i++) { /* as test_function_tolerance */
+				win.obs[i].u += i % 3 == 0 ? 0.5 : -0.25;
+				win.obs[i].v += i % 5 == 0 ? -0.5 : 0.125;
+			}
+			o.max_iterations = 5;
+			o.function_tolerance = 1e-4;
+		}
+		if (v == 2)
+			win.obs[137].u += 25;
+		perturb(v == 2 ? 0.002 : 0.01, v == 2 ? 0.02 : 0.1, v == 2 ? 0.05 : 0.3);
+		memcpy(start_poses, win.poses, sizeof(win.poses));
+		memcpy(start_pts, win.pts, sizeof(double) * 3 * win.n_pts);
+		struct mvod_ba_problem p = problem();
+		struct mvod_ba_result rc, ro;
+		assert_int_equal(mvod_ba_solve(*state, &p, &o, &rc), 0);
+		memcpy(c_poses, win.poses, sizeof(win.poses));
+		memcpy(c_pts, win.pts, sizeof(double) * 3 * win.n_pts);
+		memcpy(c_out, win.outlier, (size_t)win.n_obs);
+		memcpy(win.poses, start_poses, sizeof(win.poses));
+		memcpy(win.pts, start_pts, sizeof(double) * 3 * win.n_pts);
+		memset(win.outlier, 0, sizeof(win.outlier));
+		o.own_solver = true; /* mvod_ba_solve ignores it; the thread dispatches on it */
+		assert_int_equal(mvod_ba_lm_solve(lm, &p, &o, &ro), 0);
+		double dp = 0, dx = 0;
+		for (int i = 0; i < 6 * POSES; i++)
+			dp = fmax(dp, fabs(win.poses[i] - c_poses[i]));
+		for (int i = 0; i < 3 * win.n_pts; i++)
+			dx = fmax(dx, fabs(win.pts[i] - c_pts[i]));
+		print_message("window %d: Ceres %d iterations, cost %.10g -> %.10g; own %d, %.10g -> "
+			      "%.10g; largest difference pose %.2g, point %.2g\n",
+			      v, rc.iterations, rc.initial_cost, rc.final_cost, ro.iterations,
+			      ro.initial_cost, ro.final_cost, dp, dx);
+		assert_true(rc.iterations >= 2); /* a solve, not a start already at the minimum */
+		assert_int_equal(ro.iterations, rc.iterations);
+		assert_int_equal(ro.converged, rc.converged);
+		assert_true(fabs(ro.initial_cost - rc.initial_cost) <= 1e-12 * rc.initial_cost);
+		assert_true(fabs(ro.final_cost - rc.final_cost) <= 1e-9 * rc.final_cost + 1e-18);
+		assert_true(dp < 1e-12);
+		assert_true(dx < 1e-9);
+		assert_int_equal(ro.n_outliers, rc.n_outliers);
+		assert_memory_equal(win.outlier, c_out, (size_t)win.n_obs);
+		assert_int_equal(ro.n_outliers, v == 2); /* the 25 px one, in window 2 only */
+		assert_memory_equal(win.poses, start_poses, sizeof(double) * 12); /* held */
+	}
+	mvod_ba_lm_destroy(lm);
+}
+
+/* The own solver's buffers bound its problems; bad input as mvod_ba_solve's. */
+static void test_own_solver_bad_problem(void **state)
+{
+	(void)state;
+	struct mvod_ba_lm *lm;
+	assert_int_equal(mvod_ba_lm_create(65, 10, 10, &lm), -EINVAL); /* above 64 poses */
+	assert_null(lm);
+	assert_int_equal(mvod_ba_lm_create(POSES, 20, 20 * POSES, &lm), 0);
+	make_window(21);
+	perturb(0, 0, 0);
+	struct mvod_ba_options o;
+	mvod_ba_options_default(&o);
+	struct mvod_ba_problem p = problem();
+	struct mvod_ba_result r;
+	assert_int_equal(mvod_ba_lm_solve(lm, &p, &o, &r), -EINVAL); /* 21 points, room for 20 */
+	make_window(20);
+	perturb(0, 0, 0);
+	p = problem();
+	win.obs[3].point = win.n_pts; /* out of range */
+	assert_int_equal(mvod_ba_lm_solve(lm, &p, &o, &r), -EINVAL);
+	win.obs[3].point = 0;
+	win.obs[3].sigma = 0;
+	assert_int_equal(mvod_ba_lm_solve(lm, &p, &o, &r), -EINVAL);
+	win.obs[3].sigma = 1;
+	assert_int_equal(mvod_ba_lm_solve(lm, &p, &o, &r), 0); /* the exact window: no step */
+	assert_int_equal(r.n_outliers, 0);
+	mvod_ba_lm_destroy(lm);
+	mvod_ba_lm_destroy(NULL);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -342,6 +464,8 @@ int main(void)
 		cmocka_unit_test(test_kitti_sized_window),
 		cmocka_unit_test(test_thread_solves_as_inline),
 		cmocka_unit_test(test_jacobians_as_autodiff),
+		cmocka_unit_test(test_own_solver_as_ceres),
+		cmocka_unit_test(test_own_solver_bad_problem),
 	};
 	return cmocka_run_group_tests(tests, setup, teardown);
 }

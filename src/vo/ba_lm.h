@@ -1,0 +1,26 @@
+/*
+ * Windowed bundle adjustment without Ceres: the same problem, options and result as
+ * ba_shim.h's mvod_ba_solve, solved by a Levenberg-Marquardt written for map mode's window
+ * (at most 64 poses) on buffers allocated at create time (ba_lm.c says what of Ceres it
+ * follows). Plain C, built with or without Ceres.
+ */
+#ifndef MVOD_BA_LM_H
+#define MVOD_BA_LM_H
+
+#include "ba_shim.h"
+
+struct mvod_ba_lm;
+
+/* Buffers for problems of up to these sizes (pose_cap <= 64). -EINVAL, -ENOMEM. */
+int mvod_ba_lm_create(int pose_cap, int point_cap, int obs_cap, struct mvod_ba_lm **out);
+void mvod_ba_lm_destroy(struct mvod_ba_lm *b);
+/*
+ * As mvod_ba_solve: p solved in place, observations behind their camera before solving
+ * flagged and left out, those above chi2_outlier after it flagged. -EINVAL for a problem
+ * larger than the buffers, a point observed more than 64 times, an index out of range or a
+ * sigma <= 0.
+ */
+int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
+		     const struct mvod_ba_options *o, struct mvod_ba_result *r);
+
+#endif
