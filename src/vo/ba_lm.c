@@ -593,6 +593,21 @@ static bool valid(const struct mvod_ba_lm *b, const struct mvod_ba_problem *p)
 	return true;
 }
 
+/*
+ * One block of the candidate: cand = x + y * sc (the step unscaled from Jacobi's columns), its
+ * squared norm into *dn and the parameters' into *xn.
+ */
+static void candidate(int dim, const double *x, const double *y, const double *sc, double *cand,
+		      double *dn, double *xn)
+{
+	for (int c = 0; c < dim; c++) {
+		double d = y[c] * sc[c];
+		cand[c] = x[c] + d;
+		*dn += d * d;
+		*xn += x[c] * x[c];
+	}
+}
+
 int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
 		     const struct mvod_ba_options *op, struct mvod_ba_result *res)
 {
@@ -653,26 +668,16 @@ int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
 			if (valid_step) {
 				/* unscaled step, its norm against the parameters' */
 				double dn = 0, xn = 0;
-				for (int k = 0; k < p->n_poses; k++) {
-					if (b->free_idx[k] < 0)
-						continue;
-					for (int c = 0; c < 6; c++) {
-						double d = b->yc[6 * k + c] * b->sc_pose[6 * k + c];
-						b->cand_poses[6 * k + c] = p->poses[6 * k + c] + d;
-						dn += d * d;
-						xn += p->poses[6 * k + c] * p->poses[6 * k + c];
-					}
-				}
-				for (int pt = 0; pt < p->n_points; pt++) {
-					if (!b->pt_used[pt])
-						continue;
-					for (int c = 0; c < 3; c++) {
-						double d = b->yx[3 * pt + c] * b->sc_pt[3 * pt + c];
-						b->cand_pts[3 * pt + c] = p->points[3 * pt + c] + d;
-						dn += d * d;
-						xn += p->points[3 * pt + c] * p->points[3 * pt + c];
-					}
-				}
+				for (int k = 0; k < p->n_poses; k++)
+					if (b->free_idx[k] >= 0)
+						candidate(6, p->poses + 6 * k, b->yc + 6 * k,
+							  b->sc_pose + 6 * k, b->cand_poses + 6 * k, &dn,
+							  &xn);
+				for (int pt = 0; pt < p->n_points; pt++)
+					if (b->pt_used[pt])
+						candidate(3, p->points + 3 * pt, b->yx + 3 * pt,
+							  b->sc_pt + 3 * pt, b->cand_pts + 3 * pt, &dn,
+							  &xn);
 				if (sqrt(dn) <= LM_PARAMETER_TOLERANCE * (sqrt(xn) + LM_PARAMETER_TOLERANCE)) {
 					converged = true;
 					it--; /* Ceres does not count the iteration that stops */
