@@ -488,9 +488,22 @@ static double record(struct run *r, const struct mvod_frame *f, const struct mvo
 	double frame_ms = record_times(r, res);
 	enum mvod_run_state state = (enum mvod_run_state)res->state; /* same values */
 	if (state != r->state) {
-		LOG(INFO, "frame %lld: %s -> %s (%s)", (long long)f->index,
+		/*
+		 * The frame's status says why, but for a lost map: the two-view algorithm takes that
+		 * frame, and its status (often rotation: too little parallax yet for a new map) is
+		 * not why tracking was lost.
+		 */
+		char why[128];
+		if (res->map_lost && res->map_lost_inliers >= 0)
+			snprintf(why, sizeof(why), "map lost: %d map points fit the pose, %d needed",
+				 res->map_lost_inliers, res->map_lost_need);
+		else if (res->map_lost)
+			snprintf(why, sizeof(why), "map lost: too few map points found in the frame "
+				 "to try a pose, %d needed", res->map_lost_need);
+		LOG(INFO, "frame %lld: %s -> %s (%s%s)", (long long)f->index,
 		    mvod_run_state_name(r->state), mvod_run_state_name(state),
-		    mvod_frame_status_name(res->status));
+		    res->map_lost ? why : mvod_frame_status_name(res->status),
+		    res->map_lost ? "; a new map is built from the last tracked frame" : "");
 		r->state = state;
 		r->faults.status_due = true; /* a state change is news: status goes with this frame */
 	}

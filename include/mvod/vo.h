@@ -215,6 +215,14 @@ struct mvod_vo_result {
 	double quality;  /* 0-1: inliers against what tracking needs (0 when not tracked) */
 	int map_points;  /* map mode: points in the map (0 in two-view mode) */
 	int keyframes;   /* map mode: keyframes in the map */
+	/*
+	 * Map mode, the frame the map was lost: how many of the map's points fit the frame's pose
+	 * (PnP inliers; -1 when too few were found in the frame to try a pose) and how many
+	 * tracking needs (min_matches). The frame's status is then the two-view algorithm's,
+	 * which takes the frame: the run loop logs this as the reason the state went to LOST.
+	 */
+	bool map_lost;
+	int map_lost_inliers, map_lost_need;
 	double scale;    /* metres per unit of the output, 0 when unknown (free scale) */
 	double scale_confidence; /* 0-1, 0 when the scale is unknown */
 	double ms[MVOD_STAGE_COUNT]; /* stage times for this frame (capture is the caller's) */

@@ -612,6 +612,9 @@ int mvod_mapvo_track(struct mvod_vo *vo, const double *gt, struct mvod_vo_result
 	int k = vo->klt ? track_klt(vo, R, t, &np) : track_orb(vo, R, t, &np, res);
 	if (k < vo->p.min_matches) {
 		/* Lost: the two-view algorithm takes this frame from the reference. */
+		res->map_lost = true;
+		res->map_lost_inliers = k >= 0 ? k : -1;
+		res->map_lost_need = vo->p.min_matches;
 		mvod_mapvo_reset(mv);
 		mv->lost = true;
 		return 0;

@@ -714,17 +714,21 @@ static void test_map_states(void **state)
 		struct mvod_pose p = map_pose(i);
 		r = feed_range(vo, &p, 0, 20);
 		assert_frame(&r, MVOD_FRAME_FEW_FEATURES, MVOD_STATE_LOST);
+		assert_false(r.map_lost); /* held, not lost: the map is kept */
 		assert_pose_equal(&r.pose, &last.pose);
 		assert_int_equal(r.map_points, last.map_points);
 	}
 	last = map_tracks(vo, 23, 30, &moved, s, &worst);
 	r = feed_unmatchable(vo);
 	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_LOST);
+	/* The loss's reason for the log: no map point matched, so no pose was tried. */
+	assert_true(r.map_lost && r.map_lost_inliers == -1 && r.map_lost_need == 30);
 	assert_int_equal(r.map_points, 0);
 	assert_pose_equal(&r.pose, &last.pose);
 	struct mvod_pose p = map_pose(31);
 	r = feed(vo, &p);
 	assert_frame(&r, MVOD_FRAME_FEW_MATCHES, MVOD_STATE_LOST);
+	assert_false(r.map_lost); /* lost at frame 30: no map to lose now */
 	assert_pose_equal(&r.pose, &last.pose);
 	for (int i = 32; i < 34; i++) {
 		p = map_pose(i);
@@ -804,6 +808,8 @@ static void rebuild(enum mvod_scale_mode scale, double want_ratio, double tol)
 	memcpy(t19, vo->pose.t, sizeof(t19));
 	r = feed_relooked(vo, 20);
 	assert_frame(&r, MVOD_FRAME_ROTATION, MVOD_STATE_LOST);
+	print_message("map lost at frame 20: %d inliers\n", r.map_lost_inliers);
+	assert_true(r.map_lost && r.map_lost_inliers < r.map_lost_need);
 	/*
 	 * Held, frame 20 keeps the camera's travel: along the last step's direction (straight
 	 * ahead here; 1e-4 rad as assert_held_travel), with --scale height at the last speed
