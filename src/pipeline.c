@@ -479,6 +479,25 @@ static bool status_periodic_due(const struct run *r)
 	return mvod_now_s() - r->last_status >= 1.0 / r->o->status_hz;
 }
 
+/*
+ * Why the state changed, for the log: the frame's status, but for a lost map, whose frame the
+ * two-view algorithm takes (its status, often rotation: too little parallax yet for a new map,
+ * is not why tracking was lost). buf holds the text when it is not a status name.
+ */
+static const char *state_reason(const struct mvod_vo_result *res, char *buf, size_t n)
+{
+	if (!res->map_lost)
+		return mvod_frame_status_name(res->status);
+	const char *rebuilt = "a new map is built from the last tracked frame";
+	if (res->map_lost_inliers >= 0)
+		snprintf(buf, n, "map lost: %d map points fit the pose, %d needed; %s",
+			 res->map_lost_inliers, res->map_lost_need, rebuilt);
+	else
+		snprintf(buf, n, "map lost: too few map points found in the frame to try a pose, %d "
+			 "needed; %s", res->map_lost_need, rebuilt);
+	return buf;
+}
+
 /* The run's own book-keeping of a frame: counts, times, state changes. Returns frame ms. */
 static double record(struct run *r, const struct mvod_frame *f, const struct mvod_vo_result *res)
 {
@@ -488,22 +507,10 @@ static double record(struct run *r, const struct mvod_frame *f, const struct mvo
 	double frame_ms = record_times(r, res);
 	enum mvod_run_state state = (enum mvod_run_state)res->state; /* same values */
 	if (state != r->state) {
-		/*
-		 * The frame's status says why, but for a lost map: the two-view algorithm takes that
-		 * frame, and its status (often rotation: too little parallax yet for a new map) is
-		 * not why tracking was lost.
-		 */
-		char why[128];
-		if (res->map_lost && res->map_lost_inliers >= 0)
-			snprintf(why, sizeof(why), "map lost: %d map points fit the pose, %d needed",
-				 res->map_lost_inliers, res->map_lost_need);
-		else if (res->map_lost)
-			snprintf(why, sizeof(why), "map lost: too few map points found in the frame "
-				 "to try a pose, %d needed", res->map_lost_need);
-		LOG(INFO, "frame %lld: %s -> %s (%s%s)", (long long)f->index,
+		char why[160];
+		LOG(INFO, "frame %lld: %s -> %s (%s)", (long long)f->index,
 		    mvod_run_state_name(r->state), mvod_run_state_name(state),
-		    res->map_lost ? why : mvod_frame_status_name(res->status),
-		    res->map_lost ? "; a new map is built from the last tracked frame" : "");
+		    state_reason(res, why, sizeof(why)));
 		r->state = state;
 		r->faults.status_due = true; /* a state change is news: status goes with this frame */
 	}

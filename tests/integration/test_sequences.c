@@ -424,10 +424,10 @@ static double map_no_jump(const struct run *r, const struct mvod_traj *gt, doubl
 
 /*
  * Frames first .. 59 after a map loss at frame first: every frame not TRACKING that is not a
- * motion step holds the pose, but those waiting for a new map's parallax (ROTATION), which keep
- * the camera's travel (mapping.c, hold_translation); TRACKING frames are steps against the map (scale source MAP) or
- * the step that rebuilt it (scaled by the old map's points the held frame saw, STRUCTURE, else
- * CONSTANT_SPEED); the last frame not TRACKING is before back.
+ * motion step holds the pose, but those waiting for a new map's parallax (ROTATION), which
+ * keep the camera's travel (mapping.c, hold_translation); TRACKING frames are steps against
+ * the map (scale source MAP) or the step that rebuilt it (scaled by the old map's points the
+ * held frame saw, STRUCTURE, else CONSTANT_SPEED); the last frame not TRACKING is before back.
  */
 static void map_recovers(const struct run *r, int first, int back)
 {
