@@ -37,6 +37,23 @@
  * backward check is not refined (forward_back()).
  */
 #define SEARCH_WIN 9
+/*
+ * New tracks start at FAST corners of the coarsest pyramid level at least DETECT_MIN_W pixels wide
+ * (positions times 2^level), at fast_threshold halved per level (a level's pixel averages four of
+ * the one below, so fine texture loses about half its contrast), ranked by the Harris score at
+ * level 0. On KITTI's 1241 px (level 1) FAST then reads a quarter of the pixels: 85.6e6 -> 80.3e6
+ * instructions per frame on 06 (FAST 10.2e6 -> 5.8e6), as many new tracks living about as long
+ * (past their first step: 29 % on 06, 45 % on 07; 30 and 47 % before, BENCHMARKS.md "Where new
+ * tracks die"). 12 KLT map rows of the clips, mean over --tracks 480/500/520: gt err_avg 0.0492 ->
+ * 0.0482, ATE 0.187 -> 0.183 m, 07's free-scale drift 1.163 -> 1.121 (each draw under 1.15);
+ * mvod-synth's 1240x376 drives along KITTI 06 and 07 (map auto and height, same draws): t_rel 1.28
+ * -> 1.13 %. At threshold 20 on level 1: 75.4e6, but 07's drift 1.194 and its height's ATE 0.384
+ * -> 0.507 m. Frames under 1024 px stay at level 0 (KITTI's level 1, 620 px, passes DETECT_MIN_W;
+ * a 640 px frame's 320 px one does not): on mvod-synth's 320x240 stop-go, level 1 (threshold 20)
+ * moved the standing camera 4 times as far a frame, over the bound of
+ * tests/integration/test_sequences.c's test_map_stop_go.
+ */
+#define DETECT_MIN_W 512
 /* A bucket's median displacement predicts its new tracks when it holds this many measured. */
 #define MIN_NEIGHBOURS 3
 /*
@@ -58,6 +75,7 @@ struct mvod_klt {
 	struct mvod_klt_params p;
 	struct mvod_klt_cv *cv;
 	int w, h;
+	int detect_level; /* pyramid level detect() runs FAST on (DETECT_MIN_W) */
 	int n;       /* live tracks */
 	int have_prev; /* a frame was tracked before (since create or reset) */
 	float *pos;  /* 2 * max_tracks: position in the last frame, pixels */
@@ -131,6 +149,8 @@ int mvod_klt_create(const struct mvod_klt_params *p, int width, int height, stru
 	k->fast_cap = width * height / 16 + 16;
 	if (k->fast_cap < p->max_tracks)
 		k->fast_cap = p->max_tracks;
+	while (k->detect_level < LEVELS && width >> (k->detect_level + 1) >= DETECT_MIN_W)
+		k->detect_level++;
 	k->occ_w = (width + OCC_PX - 1) / OCC_PX;
 	k->occ_h = (height + OCC_PX - 1) / OCC_PX;
 	int ret = alloc_arrays(k);
@@ -280,7 +300,8 @@ static void add_corners(struct mvod_klt *k, int nc, int quota)
 static int detect(struct mvod_klt *k, const struct mvod_image *grey)
 {
 	int nf;
-	int ret = mvod_klt_cv_fast(k->cv, grey, k->p.fast_threshold, k->fast_xy, &nf);
+	int ret = mvod_klt_cv_fast_level(k->cv, k->detect_level,
+					 k->p.fast_threshold >> k->detect_level, k->fast_xy, &nf);
 	if (ret)
 		return ret;
 	mark_tracks(k);

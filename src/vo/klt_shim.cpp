@@ -93,6 +93,17 @@ extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, int win, in
 	});
 }
 
+/* k->corners' first fast_cap positions into xy, times scale; *n: how many. */
+static void corners_out(struct mvod_klt_cv *k, float scale, float *xy, int *n)
+{
+	int m = std::min((int)k->corners.size(), k->fast_cap);
+	for (int i = 0; i < m; i++) {
+		xy[2 * i] = k->corners[(size_t)i].pt.x * scale;
+		xy[2 * i + 1] = k->corners[(size_t)i].pt.y * scale;
+	}
+	*n = m;
+}
+
 extern "C" int mvod_klt_cv_fast(struct mvod_klt_cv *k, const struct mvod_image *grey, int threshold,
 				float *xy, int *n)
 {
@@ -100,12 +111,23 @@ extern "C" int mvod_klt_cv_fast(struct mvod_klt_cv *k, const struct mvod_image *
 		return -EINVAL;
 	return mvod_guarded([&] {
 		cv::FAST(view(grey), k->corners, threshold, true);
-		int m = std::min((int)k->corners.size(), k->fast_cap);
-		for (int i = 0; i < m; i++) {
-			xy[2 * i] = k->corners[(size_t)i].pt.x;
-			xy[2 * i + 1] = k->corners[(size_t)i].pt.y;
-		}
-		*n = m;
+		corners_out(k, 1, xy, n);
+		return 0;
+	});
+}
+
+extern "C" int mvod_klt_cv_fast_level(struct mvod_klt_cv *k, int level, int threshold, float *xy,
+				      int *n)
+{
+	if (k->have < 1 || level < 0 || level > k->levels)
+		return -EINVAL;
+	return mvod_guarded([&] {
+		/*
+		 * A pyramid built with derivatives holds level l's image at 2l (its derivatives at
+		 * 2l + 1); Lucas-Kanade maps level l to level 0 by 2^l, and so does this.
+		 */
+		cv::FAST(k->newest[(size_t)(2 * level)], k->corners, threshold, true);
+		corners_out(k, (float)(1 << level), xy, n);
 		return 0;
 	});
 }

@@ -44,6 +44,12 @@ int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, int win, int levels, c
 int mvod_klt_cv_fast(struct mvod_klt_cv *k, const struct mvod_image *grey, int threshold,
 		     float *xy, int *n);
 
+/*
+ * The same on level level (at most create's) of the newest pyramid, positions in level 0's
+ * pixels (times 2^level).
+ */
+int mvod_klt_cv_fast_level(struct mvod_klt_cv *k, int level, int threshold, float *xy, int *n);
+
 #ifdef __cplusplus
 }
 #endif
