@@ -5,20 +5,18 @@
 # Timing lives here, never in tests.
 #
 # Usage: bench/run.sh [BUILDDIR]. Tables, CSVs and plots go to BUILDDIR/bench-out/; the
-# KITTI 00 render (4541 frames, ~4 min, ~360 MB) is cached in BUILDDIR/bench-cache/ and reused
-# while its mvod-synth command line is unchanged.
+# KITTI 00 render (4541 frames, ~4 min, ~360 MB) is cached in BUILDDIR/bench-cache/ (or
+# MVOD_BENCH_CACHE) and reused while its mvod-synth command line is unchanged (bench/lib.sh).
+# bench/instructions.sh, clips.sh, long.sh and fps.sh measure one thing each, as the latest
+# sections of BENCHMARKS.md do.
 set -euo pipefail
-build=${1:-build}
-root=$(cd "$(dirname "$0")/.." && pwd)
-data=${MVOD_DATA:-$root/../shared/data}
+. "$(dirname "$0")/lib.sh"
+bench_init "${1:-}"
 out=$build/bench-out
-cache=$build/bench-cache
-mkdir -p "$out" "$cache"
+mkdir -p "$out"
 
 echo "# mvod bench, $(date -u +%Y-%m-%d)"
-echo "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores," \
-	"$(free -g | awk '/^Mem:/ {print $2}') GiB; $(uname -sr);" \
-	"OpenCV $(pkg-config --modversion opencv4); $(gcc --version | head -1); $("$build/mvod" --version)"
+machine
 echo
 
 # Runs mvod bench, printing the command and how long it took.
@@ -28,7 +26,7 @@ bench() {
 	echo "## $name"
 	echo "\$ mvod bench $*"
 	local t0=$SECONDS
-	"$build/mvod" bench "$@"
+	"$mvod" bench "$@"
 	echo
 	echo "($((SECONDS - t0)) s)"
 	echo
@@ -46,25 +44,16 @@ for seq in 06 07; do
 		--plots "$out/kitti-$seq"
 done
 
-# The whole KITTI 00 path (3.7 km) through a synthetic street, at KITTI's field of view
-# (fx = 707 px at 1226 px wide, so 369 px at 640) and a quarter of its pixels.
+# The whole KITTI 00 path (3.7 km) through a synthetic street (bench/lib.sh's drive).
 gt00=$data/kitti-groundtruth/00.txt
-synth=$cache/kitti00-640x192
-args=(--path "$gt00" --size 640x192 --fx 369 --format mkv)
 if [ -f "$gt00" ]; then
-	if [ "$(cat "$synth/args" 2>/dev/null)" != "${args[*]}" ]; then
-		echo "## rendering KITTI 00 with mvod-synth ${args[*]} (cached in $synth)"
-		rm -rf "$synth"
-		"$build/tools/mvod-synth" --out "$synth" "${args[@]}"
-		echo "${args[*]}" >"$synth/args"
-		echo
-	fi
+	k00=$(drive 00)
 	# Map mode (the default), and two-view mode beside it for comparison.
 	for mode in map twoview; do
 		for scale in auto gt; do
 			bench "mvod-synth along KITTI 00's ground truth, 4541 frames, $mode, $scale scale" \
-				--source "file:$synth/video.mkv" --calib "$synth/calib.json" \
-				--gt "$synth/gt.tum" --mode $mode --scale $scale \
+				--source "file:$k00/video.mkv" --calib "$k00/calib.json" \
+				--gt "$k00/gt.tum" --mode $mode --scale $scale \
 				--report "$out/kitti00-synth-$mode-$scale.md" \
 				--plots "$out/kitti00-synth-$mode-$scale"
 		done
@@ -78,7 +67,7 @@ dir=$data/kitti-odometry-06-clip
 if command -v valgrind >/dev/null && [ -d "$dir" ]; then
 	for mode in map twoview; do
 		echo "## callgrind, KITTI 06 clip, first 20 frames, ground-truth scale, $mode mode"
-		valgrind --tool=callgrind --callgrind-out-file="$out/cg-$mode.out" "$build/mvod" \
+		valgrind --tool=callgrind --callgrind-out-file="$out/cg-$mode.out" "$mvod" \
 			--no-lcm -q --source "kitti:$dir/sequences/06" --gt "$dir/poses/06.txt" \
 			--scale gt --mode $mode --max-frames 20 \
 			2>&1 | sed -n 's/.*Collected : /    instructions: /p'

@@ -1,0 +1,108 @@
+# Shared by the bench/ scripts (sourced, not run).
+#
+# bench_init BUILDDIR sets root (the repository), build (BUILDDIR, default $BUILDDIR or build),
+# mvod and synth (the binaries in it), data (${MVOD_DATA:-$root/../shared/data}, resolved) and
+# cache (${MVOD_BENCH_CACHE:-BUILDDIR/bench-cache}: mvod-synth renders, kept between runs).
+
+bench_init() {
+	root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+	build=${1:-${BUILDDIR:-build}}
+	mvod=$build/mvod
+	synth=$build/tools/mvod-synth
+	data=${MVOD_DATA:-$root/../shared/data}
+	# Resolved, so that a render's recorded command line is the same from every worktree.
+	[ -d "$data" ] && data=$(cd "$data" && pwd -P)
+	cache=${MVOD_BENCH_CACHE:-$build/bench-cache}
+	if [ ! -x "$mvod" ]; then
+		echo "$mvod: not built (meson setup $build && meson compile -C $build)" >&2
+		exit 1
+	fi
+}
+
+# bench_args ARGS...: the scripts' command line, [BUILDDIR] [-- EXTRA...]: bench_init BUILDDIR
+# and extra=(EXTRA...); -h or --help prints the usage.
+bench_args() {
+	local b=
+	case ${1:-} in -h | --help) usage ;; --) ;; -*) usage 2 >&2 ;; *) b=${1:-} && shift $(($# > 0)) ;; esac
+	if [ "${1:-}" = -- ]; then shift; fi
+	extra=("$@")
+	bench_init "$b"
+}
+
+# machine: one line on the machine and the build (say it beside any wall-clock figure).
+machine() {
+	echo "machine: $(lscpu | sed -n 's/^Model name: *//p'), $(nproc) cores," \
+		"$(free -g | awk '/^Mem:/ {print $2}') GiB; $(uname -sr); load $(cut -d' ' -f1-3 \
+		/proc/loadavg); OpenCV $(pkg-config --modversion opencv4); $(gcc --version | head -1);" \
+		"$("$mvod" --version)"
+}
+
+# usage: prints the calling script's top comment (its usage) and exits.
+usage() {
+	sed -n '2,/^set -euo/p' "$0" | sed '$d; s/^# \{0,1\}//'
+	exit "${1:-0}"
+}
+
+# need PATH...: exits 77 (skipped, as meson's tests do) naming the first PATH that is absent.
+need() {
+	local p
+	for p; do
+		if [ ! -e "$p" ]; then
+			echo "$p absent: skipped (set MVOD_DATA to the folder holding the data)" >&2
+			exit 77
+		fi
+	done
+}
+
+# render NAME ARGS...: prints the folder $cache/NAME holding `mvod-synth ARGS`, rendering it
+# first unless it holds exactly that already (its file `args` records the command line). A
+# render is written beside it and renamed when whole, so an interrupted one is never reused.
+render() {
+	local dir=$cache/$1
+	shift
+	if [ "$(cat "$dir/args" 2>/dev/null)" != "$*" ]; then
+		echo "rendering mvod-synth $* into $dir" >&2
+		rm -rf "$dir" "$dir.part"
+		mkdir -p "$cache"
+		"$synth" --out "$dir.part" "$@" >&2
+		echo "$*" >"$dir.part/args"
+		mv "$dir.part" "$dir"
+	fi
+	echo "$dir"
+}
+
+# drive NN: render (as above) of a drive along the whole KITTI NN ground truth in ../shared/data
+# through mvod-synth's street at KITTI's field of view (fx 707 px at 1226 px wide, so 369 px at
+# 640) and a quarter of its pixels; exits 77 when that ground truth is absent.
+drive() {
+	local gt=$data/kitti-groundtruth/$1.txt
+	need "$gt"
+	render "kitti$1-640x192" --path "$gt" --size 640x192 --fx 369 --format mkv
+}
+
+# spawn CMD...: runs CMD in the background, at most ${JOBS:-2} at once; `wait` for the last.
+spawn() {
+	while [ "$(jobs -rp | wc -l)" -ge "${JOBS:-2}" ]; do
+		wait -n || true
+	done
+	"$@" &
+}
+
+# bench_row FILE ARGS...: `mvod bench ARGS`, its output (table row, CSV, log) into FILE.
+bench_row() {
+	local file=$1
+	shift
+	"$mvod" bench "$@" >"$file" 2>&1 || echo "mvod bench $* failed: see $file" >&2
+}
+
+# col FILE NAME: column NAME (as in the CSV header: t_rel_pct, scale_drift, ...) of the last
+# row `mvod bench` printed into FILE; "-" when there is none.
+col() {
+	awk -F, -v name="$2" '
+		$1 == "detector" {
+			c = 0
+			for (i = 1; i <= NF; i++) if ($i == name) c = i
+			if (c && getline > 0) v = $c
+		}
+		END { print (v == "" ? "-" : v) }' "$1"
+}

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Long drives: `mvod bench` (map mode) along mvod-synth renders of the whole KITTI 06, 07 and 00
+# ground truth in ../shared/data (640x192, KITTI's field of view; 1101, 1101 and 4541 frames), in
+# free scale (auto) and from the camera's height (1.6 m, the synthetic ground's), as BENCHMARKS.md
+# judges accuracy on drives 5-70 times the clips' length. Prints KITTI's t_rel % per run and
+# their mean: one change moves a drive's t_rel by chance (KITTI 00 at --tracks 480/500/520:
+# 4.20/3.01/4.68 %), so judge by the mean over drives and draws (e.g. -- --tracks 520).
+#
+# Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [JOBS=2] bench/long.sh [BUILDDIR] \
+#            [-- BENCH_ARGS...]
+# BENCH_ARGS go to every run. Renders missing from the cache (see bench/lib.sh) are made first:
+# under a minute each for 06 and 07, 4 minutes for 00 (360 MB); then 2 minutes of runs.
+# Writes into OUT (default BUILDDIR/bench-out/long), for each run kNN-SCALE: .row (mvod bench's
+# output) and .traj (its trajectory); and table.md, which it also prints.
+set -euo pipefail
+. "$(dirname "$0")/lib.sh"
+bench_args "$@"
+out=${OUT:-$build/bench-out/long}
+mkdir -p "$out"
+declare -A dir
+for d in ${DRIVES:-06 07 00}; do
+	dir[$d]=$(drive "$d")
+done
+runs=()
+for d in ${DRIVES:-06 07 00}; do
+	for scale in ${SCALES:-auto height}; do
+		height=()
+		[ "$scale" = height ] && height=(--camera-height 1.6)
+		runs+=("k$d-$scale")
+		spawn bench_row "$out/k$d-$scale.row" --source "file:${dir[$d]}/video.mkv" \
+			--calib "${dir[$d]}/calib.json" --gt "${dir[$d]}/gt.tum" --scale "$scale" \
+			"${height[@]}" --trajectory "$out/k$d-$scale.traj" --log-level warn "${extra[@]}"
+	done
+done
+wait
+{
+	echo "| run | frames | t_rel % | r_rel deg/100m | ATE m | scale drift |"
+	echo "|---|--:|--:|--:|--:|--:|"
+	for run in "${runs[@]}"; do
+		f=$out/$run.row
+		echo "| $run | $(col "$f" frames) | $(col "$f" t_rel_pct) | $(col "$f" r_rel_deg_100m)" \
+			"| $(col "$f" ate_m) | $(col "$f" scale_drift) |"
+	done
+} >"$out/table.md"
+awk -F' *[|] *' 'NR > 2 && $4 != "-" { s += $4; n++ }
+	END { if (n) printf "mean t_rel %%: %.2f over %d runs\n", s / n, n }' "$out/table.md" >>"$out/table.md"
+cat "$out/table.md"
