@@ -224,8 +224,8 @@ static void test_synth_odd_size(void **state)
 			char name[16];
 			snprintf(name, sizeof(name), "odd_%s", codecs[k]);
 			snprintf(dir[k], sizeof(dir[k]), "%s", harness_tmp_path(name));
-			harness_synth(dir[k], "turn", N, "mkv", "--size", "321x241", "--codec", codecs[k],
-				      NULL);
+			harness_synth(dir[k], "turn", N, "mkv", "--size", "321x241", "--codec",
+				      codecs[k], NULL);
 			char calib[600];
 			snprintf(calib, sizeof(calib), "%s/calib.json", dir[k]);
 			struct mvod_camera cam;
@@ -247,15 +247,16 @@ static void test_synth_odd_size(void **state)
 			next_frame(cap[k], &f[k]);
 			assert_int_equal(f[k].index, i);
 			if (f[k].img.w != SW || f[k].img.h != SH)
-				fail_msg("%s frame %d is %dx%d, not 321x241", k < 2 ? codecs[k] : "png", i,
-					 f[k].img.w, f[k].img.h);
+				fail_msg("%s frame %d is %dx%d, not 321x241",
+					 k < 2 ? codecs[k] : "png", i, f[k].img.w, f[k].img.h);
 			assert_int_equal(f[k].img.fmt, MVOD_PIX_GREY);
 		}
 		for (int k = 0; k < 2; k++)
 			for (int y = 0; y < SH; y++)
 				if (memcmp(f[k].img.data + y * f[k].img.stride,
 					   f[2].img.data + y * f[2].img.stride, SW))
-					fail_msg("%s frame %d row %d differs from the PNG", codecs[k], i, y);
+					fail_msg("%s frame %d row %d differs from the PNG",
+						 codecs[k], i, y);
 	}
 	for (int k = 0; k < 3; k++)
 		mvod_capture_stop(cap[k]);
@@ -305,12 +306,13 @@ static void test_synth_same_bytes(void **state)
 			char name[32];
 			snprintf(name, sizeof(name), "bytes_%s_%d", codecs[k], run);
 			snprintf(dir[run], sizeof(dir[run]), "%s", harness_tmp_path(name));
-			harness_synth(dir[run], "turn", 3, "mkv", "--size", "65x49", "--codec", codecs[k],
-				      NULL);
+			harness_synth(dir[run], "turn", 3, "mkv", "--size", "65x49", "--codec",
+				      codecs[k], NULL);
 			data[run] = slurp_video(dir[run], &n[run]);
 		}
 		if (n[0] != n[1] || memcmp(data[0], data[1], n[0]) != 0)
-			fail_msg("%s: video.mkv differs between two runs with the same seed", codecs[k]);
+			fail_msg("%s: video.mkv differs between two runs with the same seed",
+				 codecs[k]);
 		free(data[0]);
 		free(data[1]);
 	}

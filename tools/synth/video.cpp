@@ -48,8 +48,8 @@ void VideoWriter::open(const std::string &path, bool raw, double fps, int width,
 	const std::string what = std::string("the ") + (raw ? "rawvideo" : "FFV1") + " codec";
 	auto fail = [&](const std::string &why, int err) {
 		release();
-		throw Failure(kExitFailure, "cannot write " + path_ + " (FFmpeg, " + what + "): " + why +
-						    (err < 0 ? ": " + av_text(err) : ""));
+		throw Failure(kExitFailure, "cannot write " + path_ + " (FFmpeg, " + what + "): " +
+						    why + (err < 0 ? ": " + av_text(err) : ""));
 	};
 	int err = avformat_alloc_output_context2(&fmt_, nullptr, "matroska", path.c_str());
 	if (err < 0)
@@ -127,7 +127,8 @@ void VideoWriter::drain()
 
 void VideoWriter::write(const cv::Mat &grey)
 {
-	CV_Assert(enc_ && grey.type() == CV_8UC1 && grey.cols == enc_->width && grey.rows == enc_->height);
+	CV_Assert(enc_ && grey.type() == CV_8UC1 && grey.cols == enc_->width &&
+		  grey.rows == enc_->height);
 	// The encoder may still hold the last frame's buffer (rawvideo wraps it in the packet):
 	// a buffer of our own again before writing into it.
 	int err = av_frame_make_writable(frame_);
@@ -136,12 +137,14 @@ void VideoWriter::write(const cv::Mat &grey)
 		throw Failure(kExitFailure, "cannot write " + path_ + ": " + av_text(err));
 	}
 	for (int y = 0; y < grey.rows; y++)
-		std::memcpy(frame_->data[0] + (ptrdiff_t)y * frame_->linesize[0], grey.ptr(y), size_t(grey.cols));
+		std::memcpy(frame_->data[0] + (ptrdiff_t)y * frame_->linesize[0], grey.ptr(y),
+			    size_t(grey.cols));
 	frame_->pts = frames_++;
 	err = avcodec_send_frame(enc_, frame_);
 	if (err < 0) {
 		release();
-		throw Failure(kExitFailure, "cannot encode a frame for " + path_ + ": " + av_text(err));
+		throw Failure(kExitFailure,
+			      "cannot encode a frame for " + path_ + ": " + av_text(err));
 	}
 	drain();
 }
