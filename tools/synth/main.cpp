@@ -6,6 +6,7 @@
 #include "failure.hpp"
 #include "paths.hpp"
 #include "render.hpp"
+#include "video.hpp"
 #include "world.hpp"
 
 extern "C" {
@@ -17,7 +18,6 @@ extern "C" {
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
 
 #include <getopt.h>
 #include <unistd.h>
@@ -97,7 +97,8 @@ Options:
   --fps F                frame rate in Hz (default 10): frame i is at i/F s, except that TUM
                          files keep their own timestamps
   --speed V              speed along built-in paths in m/s (default 1.0)
-  --size WxH             image size in pixels (default 640x480)
+  --size WxH             image size in pixels, 16..16384 a side, odd or even (default
+                         640x480); video.mkv has exactly this size too
   --fx F, --fy F         focal lengths in pixels (default fx = 0.9 * width, fy = fx)
   --cx F, --cy F         principal point in pixels (default (width-1)/2, (height-1)/2)
   --distortion K1,K2,P1,P2[,K3]
@@ -412,14 +413,9 @@ public:
 			open_times(dir_ / "images" / "times.txt", image_times_);
 		} else if (!dataset_) {
 			const fs::path video = dir_ / "video.mkv";
-			// Y800: FFmpeg's rawvideo in 8-bit grey, which OpenCV's writer keeps grey for a
-			// grey writer (as it does FFV1) and Matroska stores as it is.
-			const int fourcc = raw_ ? cv::VideoWriter::fourcc('Y', '8', '0', '0')
-						: cv::VideoWriter::fourcc('F', 'F', 'V', '1');
-			if (!video_.open(video.string(), cv::CAP_FFMPEG, fourcc, o.fps, cv::Size(cam.width, cam.height),
-					 false))
-				throw Failure(kExitFailure, "cannot write " + video.string() + " (OpenCV's FFmpeg backend with the " +
-								    (raw_ ? "rawvideo" : "FFV1") + " codec)");
+			// Y800 (--codec raw) or FFV1, 8-bit grey either way, at exactly the calibration's
+			// size, odd sides included (video.hpp: OpenCV's writer made them even).
+			video_.open(video.string(), raw_, o.fps, cam.width, cam.height);
 		}
 	}
 
@@ -459,7 +455,7 @@ public:
 	// Flushes and closes everything, reporting the first error any writer saw.
 	void close()
 	{
-		video_.release();
+		video_.close();
 		if (dataset_)
 			dataset_->close();
 		close_times(dir_ / "times.txt", times_);
@@ -564,7 +560,7 @@ private:
 	bool png_;
 	bool raw_; // video.mkv uncompressed (--codec raw)
 	std::string board_;
-	cv::VideoWriter video_;
+	VideoWriter video_; // video.mkv (--format mkv)
 	std::unique_ptr<DatasetWriter> dataset_; // --format euroc or tum
 	std::ofstream times_, image_times_;
 	mvod_traj_writer *tum_ = nullptr, *kitti_ = nullptr;
