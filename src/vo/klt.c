@@ -41,16 +41,16 @@
  * New tracks start at FAST corners of the coarsest pyramid level at least DETECT_MIN_W pixels wide
  * (positions times 2^level), at fast_threshold halved per level (a level's pixel averages four of
  * the one below, so fine texture loses about half its contrast), ranked by the Harris score at
- * level 0. On KITTI's 1241 px (level 1) FAST then reads a quarter of the pixels: 85.6e6 -> 80.3e6
- * instructions per frame on 06 (FAST 10.2e6 -> 5.8e6), as many new tracks living about as long
- * (past their first step: 29 % on 06, 45 % on 07; 30 and 47 % before, BENCHMARKS.md "Where new
- * tracks die"). 12 KLT map rows of the clips, mean over --tracks 480/500/520: gt err_avg 0.0492 ->
- * 0.0482, ATE 0.187 -> 0.183 m, 07's free-scale drift 1.163 -> 1.121 (each draw under 1.15);
- * mvod-synth's 1240x376 drives along KITTI 06 and 07 (map auto and height, same draws): t_rel 1.28
- * -> 1.13 %. At threshold 20 on level 1: 75.4e6, but 07's drift 1.194 and its height's ATE 0.384
- * -> 0.507 m. Frames under 1024 px stay at level 0 (KITTI's level 1, 620 px, passes DETECT_MIN_W;
- * a 640 px frame's 320 px one does not): on mvod-synth's 320x240 stop-go, level 1 (threshold 20)
- * moved the standing camera 4 times as far a frame, over the bound of
+ * level 0. On KITTI's 1226-1241 px (level 1) FAST then reads a quarter of the pixels: 85.6e6 ->
+ * 80.3e6 instructions per frame on 06 (FAST 10.2e6 -> 5.8e6), as many new tracks living about as
+ * long (past their first step: 29 % on 06, 45 % on 07; 30 and 47 % before, BENCHMARKS.md "Where
+ * new tracks die"). 12 KLT map rows of the clips, mean over --tracks 480/500/520: gt err_avg
+ * 0.0492 -> 0.0482, ATE 0.187 -> 0.183 m, 07's free-scale drift 1.163 -> 1.121 (each draw under
+ * 1.15); mvod-synth's 1240x376 drives along KITTI 06 and 07 (map auto and height, same draws):
+ * t_rel 1.28 -> 1.13 %. At threshold 20 on level 1: 75.4e6, but 07's drift 1.194 and its height's
+ * ATE 0.384 -> 0.507 m. Frames under 1024 px stay at level 0 (KITTI's level 1, 613-620 px, passes
+ * DETECT_MIN_W; a 640 px frame's 320 px one does not): on mvod-synth's 320x240 stop-go, level 1
+ * (threshold 20) moved the standing camera 4 times as far a frame, over the bound of
  * tests/integration/test_sequences.c's test_map_stop_go.
  */
 #define DETECT_MIN_W 512
