@@ -37,6 +37,8 @@ void harness_source_open_fails(const char *uri, int code, const char *needle);
 void harness_write_file(const char *path, const char *text);
 /* Reads at most len - 1 bytes of path into buf, NUL-terminated; "" when it cannot be read. */
 void harness_read_file(const char *path, char *buf, size_t len);
+/* The whole of dir/name, malloc'd and NUL-terminated, its length in *len; missing: fails. */
+char *harness_slurp(const char *dir, const char *name, size_t *len);
 /* A fresh temporary directory, removed by harness_cleanup(). */
 const char *harness_tmpdir(void);
 /* meson install of the build tree into the DESTDIR root, without a rebuild; a failure fails. */

@@ -80,30 +80,11 @@ static void render(const char *dir, const char *board, const char *lens_opt, con
 		fail_msg("mvod-synth --board %s failed (%d): %s", board, r.status, r.err);
 }
 
-static char *slurp(const char *dir, const char *name, size_t *len)
-{
-	char path[512];
-	snprintf(path, sizeof(path), "%s/%s", dir, name);
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		fail_msg("%s is missing", path);
-	fseek(f, 0, SEEK_END);
-	long n = ftell(f);
-	fseek(f, 0, SEEK_SET);
-	char *buf = malloc((size_t)n + 1);
-	assert_non_null(buf);
-	assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-	buf[n] = '\0';
-	fclose(f);
-	*len = (size_t)n;
-	return buf;
-}
-
 /* Reads board_poses.txt into rvec/tvec per view. */
 static void read_poses(const char *dir, double pose[VIEWS][6])
 {
 	size_t len;
-	char *text = slurp(dir, "board_poses.txt", &len);
+	char *text = harness_slurp(dir, "board_poses.txt", &len);
 	int n = 0;
 	for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
 		if (line[0] == '#')
@@ -125,7 +106,7 @@ static void check_corners(const char *dir, const struct mvod_board *b, const str
 	double pose[VIEWS][6];
 	read_poses(dir, pose);
 	size_t len;
-	char *text = slurp(dir, "corners.txt", &len);
+	char *text = harness_slurp(dir, "corners.txt", &len);
 	int n = 0, count = mvod_board_corner_count(b);
 	double worst = 0;
 	for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
@@ -176,7 +157,7 @@ static void check_set(const char *name, const char *spec, const char *lens_opt, 
 					    "images/000000.png", "images/000007.png"};
 	for (size_t i = 0; i < sizeof(files) / sizeof(files[0]); i++) {
 		size_t n1, n2;
-		char *a = slurp(dir, files[i], &n1), *c = slurp(again, files[i], &n2);
+		char *a = harness_slurp(dir, files[i], &n1), *c = harness_slurp(again, files[i], &n2);
 		if (n1 != n2 || memcmp(a, c, n1) != 0)
 			fail_msg("%s differs between two runs with the same seed", files[i]);
 		free(a);

@@ -272,23 +272,6 @@ static void test_synth_odd_size(void **state)
 		fail_msg("mvod bench on mvod-synth's own 321x241 pair: %s", r.err);
 }
 
-/* The whole of dir/video.mkv, malloc'd; its size in *n. */
-static char *slurp_video(const char *dir, size_t *n)
-{
-	char path[600];
-	snprintf(path, sizeof(path), "%s/video.mkv", dir);
-	FILE *f = fopen(path, "rb");
-	if (!f)
-		fail_msg("%s: cannot open", path);
-	long long size = file_bytes(path);
-	char *data = malloc((size_t)size + 1);
-	assert_non_null(data);
-	*n = fread(data, 1, (size_t)size, f);
-	fclose(f);
-	assert_int_equal(*n, (size_t)size);
-	return data;
-}
-
 /*
  * The same arguments and seed give the same video.mkv, byte for byte, for both codecs (the
  * README says so of mvod-synth's output): before, Matroska's random segment and track UIDs
@@ -308,7 +291,7 @@ static void test_synth_same_bytes(void **state)
 			snprintf(dir[run], sizeof(dir[run]), "%s", harness_tmp_path(name));
 			harness_synth(dir[run], "turn", 3, "mkv", "--size", "65x49", "--codec",
 				      codecs[k], NULL);
-			data[run] = slurp_video(dir[run], &n[run]);
+			data[run] = harness_slurp(dir[run], "video.mkv", &n[run]);
 		}
 		if (n[0] != n[1] || memcmp(data[0], data[1], n[0]) != 0)
 			fail_msg("%s: video.mkv differs between two runs with the same seed",
