@@ -15,7 +15,7 @@ struct mvod_klt_params {
 	int max_tracks;  /* tracks kept at most; corners are detected when fewer than 3/4 remain */
 	double fb_px;    /* forward-backward check: a track whose point, tracked forward then back,
 			  * lands farther than this from where it started (pixels) is dropped */
-	int fast_threshold; /* FAST's grey-level contrast */
+	int fast_threshold; /* FAST's grey-level contrast at full size (halved per level: klt.c) */
 };
 /* max_tracks 500, fb_px 0.5, fast_threshold 20. */
 void mvod_klt_params_default(struct mvod_klt_params *p);

@@ -23,6 +23,12 @@ std::string av_text(int err)
 
 } // namespace
 
+void VideoWriter::fail(const std::string &what, int err)
+{
+	release();
+	throw Failure(kExitFailure, what + ": " + av_text(err));
+}
+
 VideoWriter::~VideoWriter()
 {
 	release();
@@ -118,10 +124,8 @@ void VideoWriter::drain()
 			pkt_->stream_index = st_->index;
 			err = av_interleaved_write_frame(fmt_, pkt_); // takes the packet's data
 		}
-		if (err < 0) {
-			release();
-			throw Failure(kExitFailure, "cannot write " + path_ + ": " + av_text(err));
-		}
+		if (err < 0)
+			fail("cannot write " + path_, err);
 	}
 }
 
@@ -132,20 +136,15 @@ void VideoWriter::write(const cv::Mat &grey)
 	// The encoder may still hold the last frame's buffer (rawvideo wraps it in the packet):
 	// a buffer of our own again before writing into it.
 	int err = av_frame_make_writable(frame_);
-	if (err < 0) {
-		release();
-		throw Failure(kExitFailure, "cannot write " + path_ + ": " + av_text(err));
-	}
+	if (err < 0)
+		fail("cannot write " + path_, err);
 	for (int y = 0; y < grey.rows; y++)
 		std::memcpy(frame_->data[0] + (ptrdiff_t)y * frame_->linesize[0], grey.ptr(y),
 			    size_t(grey.cols));
 	frame_->pts = frames_++;
 	err = avcodec_send_frame(enc_, frame_);
-	if (err < 0) {
-		release();
-		throw Failure(kExitFailure,
-			      "cannot encode a frame for " + path_ + ": " + av_text(err));
-	}
+	if (err < 0)
+		fail("cannot encode a frame for " + path_, err);
 	drain();
 }
 
@@ -162,9 +161,9 @@ void VideoWriter::close()
 		err = av_write_trailer(fmt_);
 	if (err >= 0)
 		err = avio_closep(&fmt_->pb);
-	release();
 	if (err < 0)
-		throw Failure(kExitFailure, "cannot finish " + path_ + ": " + av_text(err));
+		fail("cannot finish " + path_, err);
+	release();
 }
 
 } // namespace synth

@@ -37,6 +37,8 @@ public:
 private:
 	void drain();
 	void release();
+	// Releases everything and throws Failure "what: FFmpeg's text for err".
+	[[noreturn]] void fail(const std::string &what, int err);
 
 	std::string path_;
 	AVFormatContext *fmt_ = nullptr;
