@@ -5,10 +5,15 @@
 # frames' set-up cancel out.
 #   default  the KITTI 06 clip in ../shared/data, frames 3-20 (N1 = 2, N2 = 20); mvod's default
 #            mode (map, --scale auto)
+#   --clip NN  the KITTI NN clip instead (06 or 07)
+#   --whole    frames 3 to the clip's last (N2 = its frames: 51 on 06, 160 on 07), the average
+#              over the clip that issue 13 counts; frames 3-20 are map mode's start, where
+#              keyframes and bundle adjustment come more often
 #   --s640   a 640x480 mvod-synth street (`mvod-synth --size 640x480 --frames 300 --codec raw`,
 #            uncompressed: nothing to decode), frames 51-300; rendered into the cache when missing
 #
-# Usage: bench/instructions.sh [--s640] [--funcs|--incl] [--top N] [BUILDDIR] [-- MVOD_ARGS...]
+# Usage: bench/instructions.sh [--s640 | --clip NN] [--whole] [--funcs|--incl] [--top N] [BUILDDIR]
+#            [-- MVOD_ARGS...]
 #   e.g. bench/instructions.sh /work/main/build -- --scale gt
 #   --funcs  also list the instructions a frame of the top N functions (self cost), largest first
 #   --incl   the same, inclusive (a function with everything it calls)
@@ -20,10 +25,12 @@
 # Needs valgrind (callgrind) and Python 3.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
-s640=0 funcs= top=30 builddir=
+s640=0 funcs= top=30 builddir= nn=06 whole=0
 while [ $# -gt 0 ]; do
 	case $1 in
 	--s640) s640=1 ;;
+	--clip) nn=$2 && shift ;;
+	--whole) whole=1 ;;
 	--funcs) funcs=self ;;
 	--incl) funcs=incl ;;
 	--top) top=$2 && shift ;;
@@ -42,10 +49,11 @@ if [ $s640 = 1 ]; then
 	src=(--source "file:$dir/video.mkv" --calib "$dir/calib.json")
 	n1=50 n2=300 tag=${TAG:-s640} what="640x480 mvod-synth street"
 else
-	clip=$data/kitti-odometry-06-clip/sequences/06
+	clip=$data/kitti-odometry-$nn-clip/sequences/$nn
 	need "$clip"
 	src=(--source "kitti:$clip")
-	n1=2 n2=20 tag=${TAG:-kitti06} what="KITTI 06 clip"
+	n1=2 n2=20 tag=${TAG:-kitti$nn} what="KITTI $nn clip"
+	[ $whole = 1 ] && n2=$(find "$clip/image_0" -name '*.png' | wc -l)
 fi
 out=${OUT:-$build/bench-out/instructions}
 mkdir -p "$out"

@@ -73,11 +73,17 @@ render() {
 
 # drive NN: render (as above) of a drive along the whole KITTI NN ground truth in ../shared/data
 # through mvod-synth's street at KITTI's field of view (fx 707 px at 1226 px wide, so 369 px at
-# 640) and a quarter of its pixels; exits 77 when that ground truth is absent.
+# 640) and a quarter of its pixels; with FULL=1 at KITTI's own size instead (1240x376, fx 707:
+# what the rules for frames 1024 px wide or more see, 3-4 times the time and the disk); exits
+# 77 when that ground truth is absent.
 drive() {
 	local gt=$data/kitti-groundtruth/$1.txt
 	need "$gt"
-	render "kitti$1-640x192" --path "$gt" --size 640x192 --fx 369 --format mkv
+	if [ "${FULL:-0}" = 1 ]; then
+		render "kitti$1-1240x376" --path "$gt" --size 1240x376 --fx 707 --format mkv
+	else
+		render "kitti$1-640x192" --path "$gt" --size 640x192 --fx 369 --format mkv
+	fi
 }
 
 # spawn CMD...: runs CMD in the background, at most ${JOBS:-2} at once; `wait` for the last.

@@ -6,16 +6,21 @@
 # their mean: one change moves a drive's t_rel by chance (KITTI 00 at --tracks 480/500/520:
 # 4.20/3.01/4.68 %), so judge by the mean over drives and draws (e.g. -- --tracks 520).
 #
-# Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [JOBS=2] bench/long.sh [BUILDDIR] \
+# Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [JOBS=2] [FULL=1] bench/long.sh [BUILDDIR] \
 #            [-- BENCH_ARGS...]
 # BENCH_ARGS go to every run. Renders missing from the cache (see bench/lib.sh) are made first:
 # under a minute each for 06 and 07, 4 minutes for 00 (360 MB); then 2 minutes of runs.
-# Writes into OUT (default BUILDDIR/bench-out/long), for each run kNN-SCALE: .row (mvod bench's
-# output) and .traj (its trajectory); and table.md, which it also prints.
+# FULL=1: the drives at KITTI's own size, 1240x376 (fx 707), where klt.c's rules for frames
+# 1024 px wide or more apply: a minute each for 06 and 07, 4 for 00 (1.5 GB); then 8 minutes of
+# runs. Writes into OUT (default BUILDDIR/bench-out/long, with FULL=1 long-full), for each run
+# kNN-SCALE: .row (mvod bench's output) and .traj (its trajectory); and table.md, which it also
+# prints.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 bench_args "$@"
-out=${OUT:-$build/bench-out/long}
+full=
+[ "${FULL:-0}" = 1 ] && full=-full
+out=${OUT:-$build/bench-out/long$full}
 mkdir -p "$out"
 declare -A dir
 for d in ${DRIVES:-06 07 00}; do
