@@ -10,6 +10,10 @@
 # run FE-MODE-SCALE-CLIP: .row (mvod bench's output) and .traj (its trajectory); and
 # table.md, the rows under one header with the run's name first, which it also prints.
 # JOBS rows run at once: the accuracy columns do not depend on it, the timing columns do.
+# DRAWS="480 500 520": every row once for each of these --tracks counts (named ...-tN), then a
+# second table, means.md, of each row's mean over them: which tracks live moves the free-scale
+# and height rows by chance far more than most changes do, so BENCHMARKS.md judges a change by
+# the mean over draws (3 times the rows and the minutes).
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 bench_args "$@"
@@ -23,14 +27,17 @@ for fe in ${FE:-klt orb}; do
 	for mode in ${MODES:-map twoview}; do
 		for scale in ${SCALES:-gt auto height}; do
 			for c in ${CLIPS:-06 07}; do
-				height=()
-				[ "$scale" = height ] && height=(--camera-height 1.65)
-				run=$fe-$mode-$scale-$c
-				runs+=("$run")
-				spawn bench_row "$out/$run.row" \
-					--source "kitti:$data/kitti-odometry-$c-clip/sequences/$c" \
-					--frontend "$fe" --mode "$mode" --scale "$scale" "${height[@]}" \
-					--trajectory "$out/$run.traj" --log-level warn "${extra[@]}"
+				for t in ${DRAWS:--}; do
+					height=() tracks=() run=$fe-$mode-$scale-$c
+					[ "$scale" = height ] && height=(--camera-height 1.65)
+					[ "$t" != - ] && tracks=(--tracks "$t") && run=$run-t$t
+					runs+=("$run")
+					spawn bench_row "$out/$run.row" \
+						--source "kitti:$data/kitti-odometry-$c-clip/sequences/$c" \
+						--frontend "$fe" --mode "$mode" --scale "$scale" \
+						"${height[@]}" "${tracks[@]}" --trajectory "$out/$run.traj" \
+						--log-level warn "${extra[@]}"
+				done
 			done
 		done
 	done
@@ -44,3 +51,22 @@ wait
 	done
 } >"$out/table.md"
 cat "$out/table.md"
+[ -z "${DRAWS:-}" ] && exit 0
+{
+	echo
+	echo "Means over --tracks ${DRAWS// //}:"
+	echo
+	echo "| run | err_avg | RPE dir deg | ATE m | scale drift |"
+	echo "|---|--:|--:|--:|--:|"
+	for run in "${runs[@]}"; do
+		f=$out/$run.row
+		echo "${run%-t*} $(col "$f" err_avg) $(col "$f" rpe_dir_deg) $(col "$f" ate_m)" \
+			"$(col "$f" scale_drift)"
+	done | awk '{ if (!($1 in n)) order[k++] = $1; n[$1]++
+		      for (i = 2; i <= 5; i++) if ($i != "-") { s[$1, i] += $i; m[$1, i]++ } }
+		END { for (j = 0; j < k; j++) { r = order[j]; line = "| " r
+			for (i = 2; i <= 5; i++)
+				line = line sprintf(" | %s", m[r, i] ? sprintf("%.4f", s[r, i] / m[r, i]) : "-")
+			print line " |" } }'
+} >"$out/means.md"
+cat "$out/means.md"

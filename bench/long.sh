@@ -4,17 +4,18 @@
 # free scale (auto) and from the camera's height (1.6 m, the synthetic ground's), as BENCHMARKS.md
 # judges accuracy on drives 5-70 times the clips' length. Prints KITTI's t_rel % per run and
 # their mean: one change moves a drive's t_rel by chance (KITTI 00 at --tracks 480/500/520:
-# 4.20/3.01/4.68 %), so judge by the mean over drives and draws (e.g. -- --tracks 520).
+# 4.20/3.01/4.68 %), so judge by the mean over drives and draws (DRAWS below).
 #
-# Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [JOBS=2] [FULL=1] bench/long.sh [BUILDDIR] \
-#            [-- BENCH_ARGS...]
-# BENCH_ARGS go to every run. Renders missing from the cache (see bench/lib.sh) are made first:
-# under a minute each for 06 and 07, 4 minutes for 00 (360 MB); then 2 minutes of runs.
-# FULL=1: the drives at KITTI's own size, 1240x376 (fx 707), where klt.c's rules for frames
-# 1024 px wide or more apply: a minute each for 06 and 07, 4 for 00 (1.5 GB); then 8 minutes of
-# runs. Writes into OUT (default BUILDDIR/bench-out/long, with FULL=1 long-full), for each run
-# kNN-SCALE: .row (mvod bench's output) and .traj (its trajectory); and table.md, which it also
-# prints.
+# Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [DRAWS="480 500 520"] [JOBS=2] [FULL=1] \
+#            bench/long.sh [BUILDDIR] [-- BENCH_ARGS...]
+# BENCH_ARGS go to every run. DRAWS: each run once for each of these --tracks counts (named
+# ...-tN), and each drive and scale's mean t_rel over them, 3 times the minutes. Renders missing
+# from the cache (see bench/lib.sh) are made first: under a minute each for 06 and 07, 4
+# minutes for 00 (360 MB); then 2 minutes of runs. FULL=1: the drives at KITTI's own size,
+# 1240x376 (fx 707), where klt.c's rules for frames 1024 px wide or more apply: a minute each
+# for 06 and 07, 4 for 00 (1.5 GB); then 8 minutes of runs. Writes into OUT (default
+# BUILDDIR/bench-out/long, with FULL=1 long-full), for each run kNN-SCALE[-tN]: .row (mvod
+# bench's output) and .traj (its trajectory); and table.md, which it also prints.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 bench_args "$@"
@@ -29,12 +30,16 @@ done
 runs=()
 for d in ${DRIVES:-06 07 00}; do
 	for scale in ${SCALES:-auto height}; do
-		height=()
-		[ "$scale" = height ] && height=(--camera-height 1.6)
-		runs+=("k$d-$scale")
-		spawn bench_row "$out/k$d-$scale.row" --source "file:${dir[$d]}/video.mkv" \
-			--calib "${dir[$d]}/calib.json" --gt "${dir[$d]}/gt.tum" --scale "$scale" \
-			"${height[@]}" --trajectory "$out/k$d-$scale.traj" --log-level warn "${extra[@]}"
+		for t in ${DRAWS:--}; do
+			height=() tracks=() run=k$d-$scale
+			[ "$scale" = height ] && height=(--camera-height 1.6)
+			[ "$t" != - ] && tracks=(--tracks "$t") && run=$run-t$t
+			runs+=("$run")
+			spawn bench_row "$out/$run.row" --source "file:${dir[$d]}/video.mkv" \
+				--calib "${dir[$d]}/calib.json" --gt "${dir[$d]}/gt.tum" \
+				--scale "$scale" "${height[@]}" "${tracks[@]}" \
+				--trajectory "$out/$run.traj" --log-level warn "${extra[@]}"
+		done
 	done
 done
 wait
@@ -47,6 +52,11 @@ wait
 			"| $(col "$f" ate_m) | $(col "$f" scale_drift) |"
 	done
 } >"$out/table.md"
-awk -F' *[|] *' 'NR > 2 && $4 != "-" { s += $4; n++ }
-	END { if (n) printf "mean t_rel %%: %.2f over %d runs\n", s / n, n }' "$out/table.md" >>"$out/table.md"
+# The mean over every run, and with DRAWS each drive and scale's mean over the draws.
+awk -F' *[|] *' 'NR > 2 && $4 != "-" { s += $4; n++; r = $2; sub(/-t[0-9]+$/, "", r)
+		if (!(r in m)) order[k++] = r; m[r] += $4; c[r]++ }
+	END { if (n) printf "mean t_rel %%: %.2f over %d runs\n", s / n, n
+	      if (n > k) for (j = 0; j < k; j++)
+		printf "%s: mean t_rel %.2f %% over %d draws\n", order[j], m[order[j]] / c[order[j]], c[order[j]] }' \
+	"$out/table.md" >>"$out/table.md"
 cat "$out/table.md"
