@@ -56,16 +56,12 @@ cat "$out/table.md"
 	echo
 	echo "Means over --tracks ${DRAWS// //}:"
 	echo
-	echo "| run | err_avg | RPE dir deg | ATE m | scale drift |"
-	echo "|---|--:|--:|--:|--:|"
-	for run in "${runs[@]}"; do
-		f=$out/$run.row
-		echo "${run%-t*} $(col "$f" err_avg) $(col "$f" rpe_dir_deg) $(col "$f" ate_m)" \
-			"$(col "$f" scale_drift)"
-	done | awk '{ if (!($1 in n)) order[k++] = $1; n[$1]++
-		      for (i = 2; i <= 5; i++) if ($i != "-") { s[$1, i] += $i; m[$1, i]++ } }
+	runs_table "err_avg|RPE dir deg|ATE m|scale drift" err_avg rpe_dir_deg ate_m scale_drift |
+		awk -F' *[|] *' 'NR <= 2 { print; next }
+		{ r = $2; sub(/-t[0-9]+$/, "", r); if (!(r in n)) order[k++] = r; n[r]++
+		  for (i = 3; i <= 6; i++) if ($i != "-") { s[r, i] += $i; m[r, i]++ } }
 		END { for (j = 0; j < k; j++) { r = order[j]; line = "| " r
-			for (i = 2; i <= 5; i++)
+			for (i = 3; i <= 6; i++)
 				line = line sprintf(" | %s", m[r, i] ? sprintf("%.4f", s[r, i] / m[r, i]) : "-")
 			print line " |" } }'
 } >"$out/means.md"

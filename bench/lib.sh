@@ -112,3 +112,23 @@ col() {
 		}
 		END { print (v == "" ? "-" : v) }' "$1"
 }
+
+# cols FILE NAME...: col for each NAME, the values joined by " | ".
+cols() {
+	local f=$1 out= name
+	shift
+	for name; do out+="${out:+ | }$(col "$f" "$name")"; done
+	echo "$out"
+}
+
+# runs_table "TITLE|TITLE..." NAME...: a markdown table of the runs named in the array runs
+# (their $out/RUN.row): a row each, the run's name, then cols NAME..., under the titles.
+runs_table() {
+	local titles=$1 run
+	shift
+	echo "| run | ${titles//|/ | } |"
+	printf '|---|' && printf -- '--:|%.0s' "$@" && echo
+	for run in "${runs[@]}"; do
+		echo "| $run | $(cols "$out/$run.row" "$@") |"
+	done
+}

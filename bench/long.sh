@@ -43,15 +43,8 @@ for d in ${DRIVES:-06 07 00}; do
 	done
 done
 wait
-{
-	echo "| run | frames | t_rel % | r_rel deg/100m | ATE m | scale drift |"
-	echo "|---|--:|--:|--:|--:|--:|"
-	for run in "${runs[@]}"; do
-		f=$out/$run.row
-		echo "| $run | $(col "$f" frames) | $(col "$f" t_rel_pct) | $(col "$f" r_rel_deg_100m)" \
-			"| $(col "$f" ate_m) | $(col "$f" scale_drift) |"
-	done
-} >"$out/table.md"
+runs_table "frames|t_rel %|r_rel deg/100m|ATE m|scale drift" \
+	frames t_rel_pct r_rel_deg_100m ate_m scale_drift >"$out/table.md"
 # The mean over every run, and with DRAWS each drive and scale's mean over the draws.
 awk -F' *[|] *' 'NR > 2 && $4 != "-" { s += $4; n++; r = $2; sub(/-t[0-9]+$/, "", r)
 		if (!(r in m)) order[k++] = r; m[r] += $4; c[r]++ }
