@@ -452,6 +452,7 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 	for (int pt = 0; pt < p->n_points; pt++) {
 		if (!b->pt_used[pt])
 			continue;
+		/* W[a][6 * k + r]: row r, column k of observation a's 6x3 W (columns contiguous) */
 		double V[9] = {0}, W[LM_POSE_CAP][18];
 		int wf[LM_POSE_CAP], nw = 0;
 		for (int s = b->start[pt]; s < b->start[pt + 1]; s++) {
@@ -466,7 +467,7 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 			wf[nw] = f;
 			for (int r = 0; r < 6; r++)
 				for (int c = 0; c < 3; c++)
-					W[nw][3 * r + c] =
+					W[nw][6 * c + r] =
 						e->Jp[r] * e->Jx[c] + e->Jp[6 + r] * e->Jx[3 + c];
 			nw++;
 		}
@@ -484,23 +485,26 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 			double *wv = b->WV + 18 * a;
 			for (int r = 0; r < 6; r++)
 				for (int c = 0; c < 3; c++)
-					wv[3 * r + c] = W[a][3 * r] * V[c] + W[a][3 * r + 1] * V[3 + c] +
-							W[a][3 * r + 2] * V[6 + c];
+					wv[3 * r + c] = W[a][r] * V[c] + W[a][6 + r] * V[3 + c] +
+							W[a][12 + r] * V[6 + c];
 			for (int r = 0; r < 6; r++)
 				rhs[6 * wf[a] + r] += wv[3 * r] * g[0] + wv[3 * r + 1] * g[1] +
 						      wv[3 * r + 2] * g[2];
+			/*
+			 * The upper triangle of S: a block of its diagonal (c from r), or a whole block
+			 * above it. One loop per case, the columns contiguous, so that the compiler
+			 * vectorises them (the sums are the same, term by term and in order).
+			 */
 			for (int c2 = 0; c2 < nw; c2++) {
 				if (wf[c2] < wf[a])
 					continue;
 				double *B = b->S + (size_t)ld * 6 * wf[a] + 6 * wf[c2];
-				for (int r = 0; r < 6; r++)
-					for (int c = 0; c < 6; c++) {
-						if (wf[c2] == wf[a] && c < r)
-							continue;
-						B[ld * r + c] -= wv[3 * r] * W[c2][3 * c] +
-								 wv[3 * r + 1] * W[c2][3 * c + 1] +
-								 wv[3 * r + 2] * W[c2][3 * c + 2];
-					}
+				const double *w = W[c2];
+				for (int r = 0; r < 6; r++) {
+					const double x = wv[3 * r], y = wv[3 * r + 1], z = wv[3 * r + 2];
+					for (int c = wf[c2] == wf[a] ? r : 0; c < 6; c++)
+						B[ld * r + c] -= x * w[c] + y * w[6 + c] + z * w[12 + c];
+				}
 			}
 		}
 	}
