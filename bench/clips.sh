@@ -57,12 +57,6 @@ cat "$out/table.md"
 	echo "Means over --tracks ${DRAWS// //}:"
 	echo
 	runs_table "err_avg|RPE dir deg|ATE m|scale drift" err_avg rpe_dir_deg ate_m scale_drift |
-		awk -F' *[|] *' 'NR <= 2 { print; next }
-		{ r = $2; sub(/-t[0-9]+$/, "", r); if (!(r in n)) order[k++] = r; n[r]++
-		  for (i = 3; i <= 6; i++) if ($i != "-") { s[r, i] += $i; m[r, i]++ } }
-		END { for (j = 0; j < k; j++) { r = order[j]; line = "| " r
-			for (i = 3; i <= 6; i++)
-				line = line sprintf(" | %s", m[r, i] ? sprintf("%.4f", s[r, i] / m[r, i]) : "-")
-			print line " |" } }'
+		draw_means
 } >"$out/means.md"
 cat "$out/means.md"

@@ -79,11 +79,9 @@ render() {
 drive() {
 	local gt=$data/kitti-groundtruth/$1.txt
 	need "$gt"
-	if [ "${FULL:-0}" = 1 ]; then
-		render "kitti$1-1240x376" --path "$gt" --size 1240x376 --fx 707 --format mkv
-	else
-		render "kitti$1-640x192" --path "$gt" --size 640x192 --fx 369 --format mkv
-	fi
+	local size=640x192 fx=369
+	[ "${FULL:-0}" = 1 ] && size=1240x376 fx=707
+	render "kitti$1-$size" --path "$gt" --size $size --fx $fx --format mkv
 }
 
 # spawn CMD...: runs CMD in the background, at most ${JOBS:-2} at once; `wait` for the last.
@@ -131,4 +129,16 @@ runs_table() {
 	for run in "${runs[@]}"; do
 		echo "| $run | $(cols "$out/$run.row" "$@") |"
 	done
+}
+
+# draw_means: a runs_table on stdin into the same table of each run's mean over its draws (the
+# runs NAME-tN of DRAWS are NAME's), "-" values left out.
+draw_means() {
+	awk -F' *[|] *' 'NR <= 2 { print; next }
+		{ r = $2; sub(/-t[0-9]+$/, "", r); if (!(r in seen)) { seen[r]; order[k++] = r }
+		  nf = NF; for (i = 3; i < NF; i++) if ($i != "-") { s[r, i] += $i; m[r, i]++ } }
+		END { for (j = 0; j < k; j++) { r = order[j]; line = "| " r
+			for (i = 3; i < nf; i++)
+				line = line sprintf(" | %s", m[r, i] ? sprintf("%.4g", s[r, i] / m[r, i]) : "-")
+			print line " |" } }'
 }

@@ -9,7 +9,7 @@
 # Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [DRAWS="480 500 520"] [JOBS=2] [FULL=1] \
 #            bench/long.sh [BUILDDIR] [-- BENCH_ARGS...]
 # BENCH_ARGS go to every run. DRAWS: each run once for each of these --tracks counts (named
-# ...-tN), and each drive and scale's mean t_rel over them, 3 times the minutes. Renders missing
+# ...-tN), and a second table of each drive and scale's means over them, 3 times the minutes. Renders missing
 # from the cache (see bench/lib.sh) are made first: under a minute each for 06 and 07, 4
 # minutes for 00 (360 MB); then 2 minutes of runs. FULL=1: the drives at KITTI's own size,
 # 1240x376 (fx 707), where klt.c's rules for frames 1024 px wide or more apply: a minute each
@@ -45,11 +45,9 @@ done
 wait
 runs_table "frames|t_rel %|r_rel deg/100m|ATE m|scale drift" \
 	frames t_rel_pct r_rel_deg_100m ate_m scale_drift >"$out/table.md"
-# The mean over every run, and with DRAWS each drive and scale's mean over the draws.
-awk -F' *[|] *' 'NR > 2 && $4 != "-" { s += $4; n++; r = $2; sub(/-t[0-9]+$/, "", r)
-		if (!(r in m)) order[k++] = r; m[r] += $4; c[r]++ }
-	END { if (n) printf "mean t_rel %%: %.2f over %d runs\n", s / n, n
-	      if (n > k) for (j = 0; j < k; j++)
-		printf "%s: mean t_rel %.2f %% over %d draws\n", order[j], m[order[j]] / c[order[j]], c[order[j]] }' \
-	"$out/table.md" >>"$out/table.md"
+means=
+[ -n "${DRAWS:-}" ] && means=$(draw_means <"$out/table.md")
+awk -F' *[|] *' 'NR > 2 && $4 != "-" { s += $4; n++ }
+	END { if (n) printf "mean t_rel %%: %.2f over %d runs\n", s / n, n }' "$out/table.md" >>"$out/table.md"
+[ -n "$means" ] && printf '\nMeans over --tracks %s:\n\n%s\n' "${DRAWS// //}" "$means" >>"$out/table.md"
 cat "$out/table.md"
