@@ -1,7 +1,7 @@
 /*
  * The KLT front end's bookkeeping in plain C: tracks in fixed-capacity arrays, the
- * forward-backward check, Harris ranking of FAST corners and their spread over a grid. OpenCV's
- * part (pyramids, Lucas-Kanade, FAST) is behind klt_shim.h.
+ * forward-backward check, Harris ranking of FAST corners and their spread over a grid.
+ * Lucas-Kanade is lk.c's; OpenCV's part (pyramids with derivatives, FAST) is behind klt_shim.h.
  */
 #include "klt.h"
 
@@ -17,7 +17,7 @@
 
 /*
  * Lucas-Kanade window, pixels, and pyramid levels above the image, with at most ITERATIONS
- * steps per level down to a step of EPS_PX (klt_shim.cpp). OpenCV's defaults are 21, 3, 30,
+ * steps per level down to a step of EPS_PX (lk.h). OpenCV's defaults are 21, 3, 30,
  * 0.01; on KITTI 06 with 500 tracks they cost 1.25e9 instructions in LK over 5 frames
  * (callgrind), 21, 3, 10, 0.03 cost 0.90e9 at the same err_avg. A 21 px window on 3 levels
  * finds the 31 px flow of a track with no prediction (mvod-synth's rotate-in-place,
@@ -74,6 +74,9 @@ struct corner {
 struct mvod_klt {
 	struct mvod_klt_params p;
 	struct mvod_klt_cv *cv;
+	/* The pyramids' levels for lk.c: older (the last frame) and newest (this one); nlev each. */
+	struct mvod_lk_level older[LEVELS + 1], newest[LEVELS + 1];
+	int nlev;
 	int w, h;
 	int detect_level; /* pyramid level detect() runs FAST on (DETECT_MIN_W) */
 	int n;       /* live tracks */
@@ -87,10 +90,6 @@ struct mvod_klt {
 	uint8_t *cell;  /* max_tracks: bucket of pos (predict's scratch) */
 	float *next, *back; /* 2 * max_tracks: forward and backward LK results */
 	uint8_t *ok, *ok_back, *sel; /* max_tracks; sel: which tracks a pass takes (flow_some) */
-	/* flow_some's compacted copies of the tracks a pass takes: 2 * max_tracks, max_tracks */
-	float *some_from, *some_to;
-	int *some_idx;
-	uint8_t *some_ok;
 	int fast_cap;
 	float *fast_xy;      /* 2 * fast_cap */
 	struct corner *corners; /* fast_cap (>= max_tracks: predict's scratch too) */
@@ -120,16 +119,11 @@ static int alloc_arrays(struct mvod_klt *k)
 	k->ok = calloc(n, 1);
 	k->ok_back = calloc(n, 1);
 	k->sel = calloc(n, 1);
-	k->some_from = calloc(2 * n, sizeof(float));
-	k->some_to = calloc(2 * n, sizeof(float));
-	k->some_idx = calloc(n, sizeof(int));
-	k->some_ok = calloc(n, 1);
 	k->fast_xy = calloc(2 * (size_t)k->fast_cap, sizeof(float));
 	k->corners = calloc((size_t)k->fast_cap, sizeof(*k->corners));
 	k->occ = calloc((size_t)k->occ_w * (size_t)k->occ_h, 1);
 	return k->pos && k->vel && k->err && k->score && k->ref && k->fresh && k->cell && k->next &&
-			       k->back && k->ok && k->ok_back && k->sel && k->some_from && k->some_to &&
-			       k->some_idx && k->some_ok && k->fast_xy && k->corners && k->occ
+			       k->back && k->ok && k->ok_back && k->sel && k->fast_xy && k->corners && k->occ
 		       ? 0
 		       : -ENOMEM;
 }
@@ -155,8 +149,7 @@ int mvod_klt_create(const struct mvod_klt_params *p, int width, int height, stru
 	k->occ_h = (height + OCC_PX - 1) / OCC_PX;
 	int ret = alloc_arrays(k);
 	if (!ret)
-		ret = mvod_klt_cv_create(width, height, WIN, LEVELS, ITERATIONS, EPS_PX, k->fast_cap,
-					 &k->cv);
+		ret = mvod_klt_cv_create(width, height, WIN, LEVELS, k->fast_cap, &k->cv);
 	if (ret) {
 		mvod_klt_destroy(k);
 		return ret;
@@ -182,10 +175,6 @@ void mvod_klt_destroy(struct mvod_klt *k)
 	free(k->ok);
 	free(k->ok_back);
 	free(k->sel);
-	free(k->some_from);
-	free(k->some_to);
-	free(k->some_idx);
-	free(k->some_ok);
 	free(k->fast_xy);
 	free(k->corners);
 	free(k->occ);
@@ -368,34 +357,36 @@ static bool predict(struct mvod_klt *k)
 }
 
 /*
+ * Lucas-Kanade (lk.h) of n points from the older pyramid to the newest (backward = 0) or back,
+ * with a win x win window on levels levels .. 0 (fewer when the pyramids have fewer).
+ */
+static void flow(struct mvod_klt *k, int backward, int win, int levels, const float *from,
+		 float *to, int n, uint8_t *ok)
+{
+	struct mvod_lk_params p = {.win = win,
+				   .levels = levels < k->nlev - 1 ? levels : k->nlev - 1,
+				   .iterations = ITERATIONS,
+				   .eps_px = EPS_PX};
+	mvod_lk_flow(backward ? k->newest : k->older, backward ? k->older : k->newest, &p, from, to,
+		     n, ok);
+}
+
+/*
  * Lucas-Kanade of the points i < n with sel[i] set, from[i] to to[i] (which holds the guess),
  * ok[i] saying which converged; ok[i] = 0 where sel[i] is not set, to[i] left as it was. LK
  * treats every point on its own, so a point's result is the same whether or not the others
  * are passed: a pass skips the tracks an earlier pass already dropped, at no change to any
  * trajectory (BENCHMARKS.md, "Bit-identical cuts"). sel may be ok.
  */
-static int flow_some(struct mvod_klt *k, int backward, int win, int levels, const float *from,
-		     float *to, int n, const uint8_t *sel, uint8_t *ok)
+static void flow_some(struct mvod_klt *k, int backward, int win, int levels, const float *from,
+		      float *to, int n, const uint8_t *sel, uint8_t *ok)
 {
-	int m = 0;
 	for (int i = 0; i < n; i++) {
-		if (!sel[i]) {
+		if (sel[i])
+			flow(k, backward, win, levels, from + 2 * i, to + 2 * i, 1, ok + i);
+		else
 			ok[i] = 0;
-			continue;
-		}
-		k->some_idx[m] = i;
-		memcpy(k->some_from + 2 * m, from + 2 * i, 2 * sizeof(float));
-		memcpy(k->some_to + 2 * m, to + 2 * i, 2 * sizeof(float));
-		m++;
 	}
-	int ret = mvod_klt_cv_flow(k->cv, backward, win, levels, k->some_from, k->some_to, m,
-				   k->some_ok);
-	for (int j = 0; j < m && !ret; j++) {
-		int i = k->some_idx[j];
-		memcpy(to + 2 * i, k->some_to + 2 * j, 2 * sizeof(float));
-		ok[i] = k->some_ok[j];
-	}
-	return ret;
 }
 
 /*
@@ -408,20 +399,20 @@ static int flow_some(struct mvod_klt *k, int backward, int win, int levels, cons
  * the tracks the search kept, the backward pass those still kept and inside the image
  * (kept() drops the others whatever their backward result).
  */
-static int forward_back(struct mvod_klt *k, bool predicted)
+static void forward_back(struct mvod_klt *k, bool predicted)
 {
 	int n = k->n, win = predicted ? SEARCH_WIN : WIN;
 	for (int i = 0; i < 2 * n; i++)
 		k->next[i] = k->pos[i] + k->vel[i];
-	int ret = mvod_klt_cv_flow(k->cv, 0, win, LEVELS, k->pos, k->next, n, k->ok);
-	if (!ret && predicted)
-		ret = flow_some(k, 0, WIN, 0, k->pos, k->next, n, k->ok, k->ok);
+	flow(k, 0, win, LEVELS, k->pos, k->next, n, k->ok);
+	if (predicted)
+		flow_some(k, 0, WIN, 0, k->pos, k->next, n, k->ok, k->ok);
 	for (int i = 0; i < n; i++) {
 		k->back[2 * i] = k->next[2 * i] - k->vel[2 * i];
 		k->back[2 * i + 1] = k->next[2 * i + 1] - k->vel[2 * i + 1];
 		k->sel[i] = k->ok[i] && inside(k, k->next[2 * i], k->next[2 * i + 1]);
 	}
-	return ret ? ret : flow_some(k, 1, win, LEVELS, k->next, k->back, n, k->sel, k->ok_back);
+	flow_some(k, 1, win, LEVELS, k->next, k->back, n, k->sel, k->ok_back);
 }
 
 /* Track i survives: both ways converged, it came back within fb_px (*fb) and is inside. */
@@ -436,11 +427,9 @@ static bool kept(const struct mvod_klt *k, int i, float *fb)
  * Every track into the newest frame, forward and back (forward_back) from its predicted flow;
  * a track stays when kept() says so.
  */
-static int follow(struct mvod_klt *k)
+static void follow(struct mvod_klt *k)
 {
-	int ret = forward_back(k, predict(k));
-	if (ret)
-		return ret;
+	forward_back(k, predict(k));
 	int m = 0;
 	float fb;
 	for (int i = 0; i < k->n; i++) {
@@ -457,7 +446,6 @@ static int follow(struct mvod_klt *k)
 		m++;
 	}
 	k->n = m;
-	return 0;
 }
 
 int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvod_features *f,
@@ -466,10 +454,12 @@ int mvod_klt_track(struct mvod_klt *k, const struct mvod_image *grey, struct mvo
 	if (f->cap < k->p.max_tracks)
 		return -EINVAL;
 	int ret = mvod_klt_cv_push(k->cv, grey);
-	if (!ret && k->have_prev)
-		ret = follow(k);
 	if (ret)
 		return ret;
+	k->nlev = mvod_klt_cv_levels(k->cv, 0, k->older, LEVELS + 1);
+	mvod_klt_cv_levels(k->cv, 1, k->newest, LEVELS + 1);
+	if (k->have_prev && k->nlev > 0)
+		follow(k);
 	k->have_prev = 1;
 	/* Topping up at 3/4: a KITTI frame loses up to a tenth of its tracks. */
 	if (k->n < k->p.max_tracks * 3 / 4 && (ret = detect(k, grey)))

@@ -22,14 +22,12 @@ struct mvod_klt_cv {
 	std::vector<cv::Mat> older, newest;
 	int have; /* pyramids built so far, up to 2 */
 	std::vector<cv::KeyPoint> corners;
-	cv::TermCriteria crit;
 };
 
-extern "C" int mvod_klt_cv_create(int width, int height, int win, int levels, int iterations,
-				  double eps_px, int fast_cap, struct mvod_klt_cv **out)
+extern "C" int mvod_klt_cv_create(int width, int height, int win, int levels, int fast_cap,
+				  struct mvod_klt_cv **out)
 {
-	if (width < 1 || height < 1 || win < 3 || levels < 0 || iterations < 1 || !(eps_px > 0) ||
-	    fast_cap < 1)
+	if (width < 1 || height < 1 || win < 3 || levels < 0 || fast_cap < 1)
 		return -EINVAL;
 	return mvod_guarded([&] {
 		auto k = std::make_unique<mvod_klt_cv>();
@@ -38,8 +36,6 @@ extern "C" int mvod_klt_cv_create(int width, int height, int win, int levels, in
 		k->levels = levels;
 		k->fast_cap = fast_cap;
 		k->win = cv::Size(win, win);
-		k->crit = cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, iterations,
-					   eps_px);
 		k->corners.reserve((size_t)fast_cap);
 		*out = k.release();
 		return 0;
@@ -64,9 +60,9 @@ extern "C" int mvod_klt_cv_push(struct mvod_klt_cv *k, const struct mvod_image *
 		std::swap(k->older, k->newest);
 		/*
 		 * Not reusing the input: level 0 is a copy, since the caller reuses grey's buffer.
-		 * withDerivatives (true) stores each level's Scharr derivatives after it, so
-		 * calcOpticalFlowPyrLK reads them instead of recomputing them for its "prev" pyramid
-		 * on every call: once per frame, 3.7e6 instructions per frame (callgrind, KITTI 06).
+		 * withDerivatives (true) stores each level's Scharr derivatives after it, which
+		 * lk.c reads as the template's: computed once per frame, 3.7e6 instructions per
+		 * frame (callgrind, KITTI 06).
 		 */
 		cv::buildOpticalFlowPyramid(view(grey), k->newest, k->win, k->levels, true,
 					    cv::BORDER_REFLECT_101, cv::BORDER_CONSTANT, false);
@@ -75,22 +71,18 @@ extern "C" int mvod_klt_cv_push(struct mvod_klt_cv *k, const struct mvod_image *
 	});
 }
 
-extern "C" int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, int win, int levels,
-				const float *from, float *to, int n, uint8_t *ok)
+extern "C" int mvod_klt_cv_levels(const struct mvod_klt_cv *k, int newest,
+				  struct mvod_lk_level *out, int max)
 {
-	if (k->have < 2 || n < 0 || win < 3 || win > k->win.width || levels < 0 || levels > k->levels)
-		return -EINVAL;
-	if (n == 0)
-		return 0;
-	return mvod_guarded([&] {
-		cv::Mat a(n, 1, CV_32FC2, const_cast<float *>(from)), b(n, 1, CV_32FC2, to);
-		cv::Mat st(n, 1, CV_8UC1, ok);
-		const std::vector<cv::Mat> &p0 = backward ? k->newest : k->older;
-		const std::vector<cv::Mat> &p1 = backward ? k->older : k->newest;
-		cv::calcOpticalFlowPyrLK(p0, p1, a, b, st, cv::noArray(), cv::Size(win, win), levels,
-					 k->crit, cv::OPTFLOW_USE_INITIAL_FLOW);
-		return 0;
-	});
+	const std::vector<cv::Mat> &p = newest ? k->newest : k->older;
+	int n = std::min((int)p.size() / 2, max);
+	for (int l = 0; l < n; l++) {
+		const cv::Mat &img = p[(size_t)(2 * l)], &d = p[(size_t)(2 * l + 1)];
+		out[l] = mvod_lk_level{img.ptr<uint8_t>(), d.ptr<int16_t>(), (ptrdiff_t)img.step,
+				       (ptrdiff_t)(d.step / sizeof(int16_t)), img.cols, img.rows,
+				       k->win.width};
+	}
+	return k->have < (newest ? 1 : 2) ? 0 : n;
 }
 
 /* k->corners' first fast_cap positions into xy, times scale; *n: how many. */

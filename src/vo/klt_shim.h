@@ -1,6 +1,6 @@
 /*
- * The OpenCV door of the KLT front end (klt.c): image pyramids built into buffers kept from
- * frame to frame, pyramidal Lucas-Kanade between the last two of them, and FAST corners.
+ * The OpenCV door of the KLT front end (klt.c): image pyramids with their Scharr derivatives,
+ * built into buffers kept from frame to frame, for lk.c's Lucas-Kanade, and FAST corners.
  * Plain C; every function catches every exception and returns 0 or -errno.
  */
 #ifndef MVOD_KLT_SHIM_H
@@ -8,6 +8,7 @@
 
 #include <stdint.h>
 
+#include "lk.h"
 #include "mvod/image.h"
 
 #ifdef __cplusplus
@@ -17,25 +18,22 @@ extern "C" {
 struct mvod_klt_cv;
 
 /*
- * Pyramids of levels + 1 levels for width x height grey frames, bordered for Lucas-Kanade
- * windows of up to win x win pixels, tracked with at most iterations steps per level, stopping
- * at a step under eps_px; FAST keeps at most fast_cap corners per frame.
+ * Pyramids of levels + 1 levels for width x height grey frames, with borders of win pixels
+ * (BORDER_REFLECT_101; the derivatives' zero); FAST keeps at most fast_cap corners per frame.
  */
-int mvod_klt_cv_create(int width, int height, int win, int levels, int iterations, double eps_px,
-		       int fast_cap, struct mvod_klt_cv **out);
+int mvod_klt_cv_create(int width, int height, int win, int levels, int fast_cap,
+		       struct mvod_klt_cv **out);
 void mvod_klt_cv_destroy(struct mvod_klt_cv *k);
 
 /* grey (borrowed for the call) becomes the newest pyramid; the one before becomes the older. */
 int mvod_klt_cv_push(struct mvod_klt_cv *k, const struct mvod_image *grey);
 
 /*
- * Lucas-Kanade for n points (x, y pairs, pixels) from the older pyramid to the newest one
- * (backward = 0) or back (backward = 1), with a win x win pixel window (at most create's) on
- * pyramid levels levels down to 0 (at most create's). to[2n] holds the initial guesses and
- * receives the tracked positions; ok[n] gets 1 where the tracker converged.
+ * The older (newest = 0) or newest pyramid's levels, at most max of them, into out (borrowed
+ * until the next push), for lk.h's tracker; returns how many levels it has (0: none yet).
  */
-int mvod_klt_cv_flow(struct mvod_klt_cv *k, int backward, int win, int levels, const float *from,
-		     float *to, int n, uint8_t *ok);
+int mvod_klt_cv_levels(const struct mvod_klt_cv *k, int newest, struct mvod_lk_level *out,
+		       int max);
 
 /*
  * FAST corners (non-maximum suppressed) of grey above threshold grey levels: xy[2 * fast_cap]

@@ -1,0 +1,659 @@
+#include "lk.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdbool.h>
+#if defined(__SSE2__)
+#include <immintrin.h>
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+#include <arm_neon.h>
+#endif
+
+/*
+ * OpenCV's fixed point: bilinear weights of W_BITS bits, interpolated intensities with 5
+ * fractional bits (the template is the pixel times 32), and the sums scaled by FLT_SCALE before
+ * the minimum eigenvalue test, whose threshold is OpenCV's default.
+ */
+#define W_BITS 14
+#define FRAC 5
+#define FLT_SCALE (1.0f / (1 << 20))
+#define MIN_EIG 1e-4f
+/* OpenCV's test for a step that undoes the one before: half of it is taken back, and it stops. */
+#define OSCILLATION_PX 0.01f
+
+/*
+ * A point's template on one level: win rows of pad int16 (win rounded up to 8), the pixel times
+ * 32 and its Scharr derivatives, zero past column win (a padded column adds nothing to a sum).
+ */
+struct tmpl {
+	int16_t t[MVOD_LK_MAX_WIN * MVOD_LK_MAX_WIN];
+	int16_t x[MVOD_LK_MAX_WIN * MVOD_LK_MAX_WIN];
+	int16_t y[MVOD_LK_MAX_WIN * MVOD_LK_MAX_WIN];
+};
+
+/*
+ * Sums are kept in 4 lanes, lane l taking columns 8k + 2l and 8k + 2l + 1 of every 8 (the SSE2
+ * multiply-add's pairs): each row's lane sums are exact integers (under 2^29: 4 blocks of 2
+ * products of at most 8160 x 4080), converted to float and added to the lane's float, rows in
+ * order, and the lanes are added as (0 + 1) + (2 + 3) at the end; every path does exactly that.
+ */
+static float lanes_sum(const float s[4])
+{
+	return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
+/* The rectangle of wpx x hpx pixels at (x, y) lies in the level and its border. */
+static bool fits(const struct mvod_lk_level *L, int x, int y, int wpx, int hpx)
+{
+	return x >= -L->border && y >= -L->border && x + wpx <= L->w + L->border &&
+	       y + hpx <= L->h + L->border;
+}
+
+static int descale(int v, int bits)
+{
+	return (v + (1 << (bits - 1))) >> bits;
+}
+
+/* Bilinear weights of W_BITS bits for fractions (a, b), as OpenCV rounds them. */
+static void weights(float a, float b, int iw[4])
+{
+	iw[0] = (int)lrintf((1.f - a) * (1.f - b) * (1 << W_BITS));
+	iw[1] = (int)lrintf(a * (1.f - b) * (1 << W_BITS));
+	iw[2] = (int)lrintf((1.f - a) * b * (1 << W_BITS));
+	iw[3] = (1 << W_BITS) - iw[0] - iw[1] - iw[2];
+}
+
+/* Pixel c of rows j0, j1 interpolated with weights iw, times 32 (FRAC bits). */
+static int interp(const uint8_t *j0, const uint8_t *j1, int c, const int iw[4])
+{
+	return descale(j0[c] * iw[0] + j0[c + 1] * iw[1] + j1[c] * iw[2] + j1[c + 1] * iw[3],
+		       W_BITS - FRAC);
+}
+
+/* Derivative k (0: d/dx, 1: d/dy) of pixel c of rows d0, d1 interpolated with weights iw. */
+static int interp_deriv(const int16_t *d0, const int16_t *d1, int c, int k, const int iw[4])
+{
+	return descale(d0[2 * c + k] * iw[0] + d0[2 * c + 2 + k] * iw[1] + d1[2 * c + k] * iw[2] +
+			   d1[2 * c + 2 + k] * iw[3],
+		       W_BITS);
+}
+
+/*
+ * The template: level L's pixels and derivatives from (tx, ty) interpolated with weights iw,
+ * into T, with the lane sums of the derivatives' products: a[0] dx dx, a[1] dy dy, a[2] dx dy.
+ */
+static void prep_plain(const struct mvod_lk_level *L, int tx, int ty, const int iw[4], int win,
+		       int pad, struct tmpl *T, float a[3][4])
+{
+	for (int k = 0; k < 3; k++)
+		for (int l = 0; l < 4; l++)
+			a[k][l] = 0;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *s0 = L->img + (ptrdiff_t)(ty + r) * L->stride + tx,
+			      *s1 = s0 + L->stride;
+		const int16_t *d0 = L->deriv + (ptrdiff_t)(ty + r) * L->dstride + 2 * tx;
+		const int16_t *d1 = d0 + L->dstride;
+		int32_t sxx[4] = {0}, syy[4] = {0}, sxy[4] = {0};
+		for (int c = 0; c < pad; c++) {
+			int in = c < win, l = (c & 7) >> 1;
+			int x = in ? interp_deriv(d0, d1, c, 0, iw) : 0;
+			int y = in ? interp_deriv(d0, d1, c, 1, iw) : 0;
+			T->t[r * pad + c] = (int16_t)(in ? interp(s0, s1, c, iw) : 0);
+			T->x[r * pad + c] = (int16_t)x;
+			T->y[r * pad + c] = (int16_t)y;
+			sxx[l] += x * x;
+			syy[l] += y * y;
+			sxy[l] += x * y;
+		}
+		for (int l = 0; l < 4; l++) {
+			a[0][l] += (float)sxx[l];
+			a[1][l] += (float)syy[l];
+			a[2][l] += (float)sxy[l];
+		}
+	}
+}
+
+/*
+ * The lane sums of (J interpolated at (ix, iy) + fraction, weights iw) - template, times the
+ * template's derivatives: b[0] along x, b[1] along y.
+ */
+static void mismatch_plain(const struct mvod_lk_level *L, int ix, int iy, const int iw[4], int win,
+			   int pad, const struct tmpl *T, float b[2][4])
+{
+	for (int l = 0; l < 4; l++)
+		b[0][l] = b[1][l] = 0;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *j0 = L->img + (ptrdiff_t)(iy + r) * L->stride + ix,
+			      *j1 = j0 + L->stride;
+		int32_t s1[4] = {0}, s2[4] = {0};
+		for (int c = 0; c < win; c++) {
+			int diff = interp(j0, j1, c, iw) - T->t[r * pad + c], l = (c & 7) >> 1;
+			s1[l] += diff * T->x[r * pad + c];
+			s2[l] += diff * T->y[r * pad + c];
+		}
+		for (int l = 0; l < 4; l++) {
+			b[0][l] += (float)s1[l];
+			b[1][l] += (float)s2[l];
+		}
+	}
+}
+
+#if defined(__SSE2__)
+/* Lanes 0 .. k - 1 of 8 int16: all ones; the rest zero. */
+static __m128i first_lanes(int k)
+{
+	static const int16_t ones_zeros[16] = {-1, -1, -1, -1, -1, -1, -1, -1};
+	return _mm_loadu_si128((const __m128i *)(ones_zeros + 8 - k));
+}
+
+/* (iw[0], iw[1]) and (iw[2], iw[3]) as int16 pairs; iw[3] may be -1 from the rounding. */
+static void pair_weights(const int iw[4], __m128i *w0, __m128i *w1)
+{
+	*w0 = _mm_set1_epi32((int)((uint32_t)(iw[0] & 0xffff) | (uint32_t)iw[1] << 16));
+	*w1 = _mm_set1_epi32((int)((uint32_t)(iw[2] & 0xffff) | (uint32_t)iw[3] << 16));
+}
+
+/* interp() of pixels c .. c + 7 (reads c .. c + 8 of both rows). */
+static __m128i interp8(const uint8_t *j0, const uint8_t *j1, int c, __m128i w0, __m128i w1)
+{
+	const __m128i z = _mm_setzero_si128(), half = _mm_set1_epi32(1 << (W_BITS - FRAC - 1));
+	__m128i v00 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j0 + c)), z);
+	__m128i v01 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j0 + c + 1)), z);
+	__m128i v10 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j1 + c)), z);
+	__m128i v11 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j1 + c + 1)), z);
+	__m128i t0 = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(v00, v01), w0),
+				   _mm_madd_epi16(_mm_unpacklo_epi16(v10, v11), w1));
+	__m128i t1 = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(v00, v01), w0),
+				   _mm_madd_epi16(_mm_unpackhi_epi16(v10, v11), w1));
+	t0 = _mm_srai_epi32(_mm_add_epi32(t0, half), W_BITS - FRAC);
+	t1 = _mm_srai_epi32(_mm_add_epi32(t1, half), W_BITS - FRAC);
+	return _mm_packs_epi32(t0, t1);
+}
+
+/*
+ * interp_deriv() of pixels c .. c + 3 as (d/dx, d/dy) pairs: 4 pairs of rows d0, d1 from pair
+ * c on, and 4 from pair c + 1 on, as OpenCV's tracker does it.
+ */
+static __m128i interp_deriv4(const int16_t *d0, const int16_t *d1, int c, __m128i w0, __m128i w1)
+{
+	const __m128i half = _mm_set1_epi32(1 << (W_BITS - 1));
+	__m128i v00 = _mm_loadu_si128((const __m128i *)(d0 + 2 * c));
+	__m128i v01 = _mm_loadu_si128((const __m128i *)(d0 + 2 * c + 2));
+	__m128i v10 = _mm_loadu_si128((const __m128i *)(d1 + 2 * c));
+	__m128i v11 = _mm_loadu_si128((const __m128i *)(d1 + 2 * c + 2));
+	__m128i t0 = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(v00, v01), w0),
+				   _mm_madd_epi16(_mm_unpacklo_epi16(v10, v11), w1));
+	__m128i t1 = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(v00, v01), w0),
+				   _mm_madd_epi16(_mm_unpackhi_epi16(v10, v11), w1));
+	t0 = _mm_srai_epi32(_mm_add_epi32(t0, half), W_BITS);
+	t1 = _mm_srai_epi32(_mm_add_epi32(t1, half), W_BITS);
+	return _mm_packs_epi32(t0, t1);
+}
+
+/* The 8 int16 of pairs from p on and from p + 8 on, split: d/dx into *x, d/dy into *y. */
+static void split_pairs(__m128i d0, __m128i d1, __m128i *x, __m128i *y)
+{
+	*x = _mm_packs_epi32(_mm_srai_epi32(_mm_slli_epi32(d0, 16), 16),
+			     _mm_srai_epi32(_mm_slli_epi32(d1, 16), 16));
+	*y = _mm_packs_epi32(_mm_srai_epi32(d0, 16), _mm_srai_epi32(d1, 16));
+}
+
+/*
+ * Both vector preps: row r's 8 pixels from column c (t, x, y; the last block's lanes past win
+ * zeroed by tail) into T, their products into the lane sums.
+ */
+static void prep_store(struct tmpl *T, int r, int c, int pad, __m128i tail, __m128i t, __m128i x,
+		       __m128i y, __m128i *sxx, __m128i *syy, __m128i *sxy)
+{
+	if (c + 8 == pad) {
+		t = _mm_and_si128(t, tail);
+		x = _mm_and_si128(x, tail);
+		y = _mm_and_si128(y, tail);
+	}
+	_mm_storeu_si128((__m128i *)(T->t + r * pad + c), t);
+	_mm_storeu_si128((__m128i *)(T->x + r * pad + c), x);
+	_mm_storeu_si128((__m128i *)(T->y + r * pad + c), y);
+	*sxx = _mm_add_epi32(*sxx, _mm_madd_epi16(x, x));
+	*syy = _mm_add_epi32(*syy, _mm_madd_epi16(y, y));
+	*sxy = _mm_add_epi32(*sxy, _mm_madd_epi16(x, y));
+}
+
+static void prep_vec(const struct mvod_lk_level *L, int tx, int ty, const int iw[4], int win,
+		     int pad, struct tmpl *T, float a[3][4])
+{
+	const __m128i z = _mm_setzero_si128(), tail = first_lanes(win - (pad - 8));
+	__m128i w0, w1;
+	pair_weights(iw, &w0, &w1);
+	__m128 axx = _mm_setzero_ps(), ayy = axx, axy = axx;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *s0 = L->img + (ptrdiff_t)(ty + r) * L->stride + tx,
+			      *s1 = s0 + L->stride;
+		const int16_t *e0 = L->deriv + (ptrdiff_t)(ty + r) * L->dstride + 2 * tx;
+		const int16_t *e1 = e0 + L->dstride;
+		__m128i sxx = z, syy = z, sxy = z, t, x, y;
+		for (int c = 0; c < pad; c += 8) {
+			t = interp8(s0, s1, c, w0, w1);
+			split_pairs(interp_deriv4(e0, e1, c, w0, w1),
+				    interp_deriv4(e0, e1, c + 4, w0, w1), &x, &y);
+			prep_store(T, r, c, pad, tail, t, x, y, &sxx, &syy, &sxy);
+		}
+		axx = _mm_add_ps(axx, _mm_cvtepi32_ps(sxx));
+		ayy = _mm_add_ps(ayy, _mm_cvtepi32_ps(syy));
+		axy = _mm_add_ps(axy, _mm_cvtepi32_ps(sxy));
+	}
+	_mm_storeu_ps(a[0], axx);
+	_mm_storeu_ps(a[1], ayy);
+	_mm_storeu_ps(a[2], axy);
+}
+
+static void mismatch_vec(const struct mvod_lk_level *L, int ix, int iy, const int iw[4], int win,
+			 int pad, const struct tmpl *T, float b[2][4])
+{
+	const __m128i z = _mm_setzero_si128();
+	__m128i w0, w1;
+	pair_weights(iw, &w0, &w1);
+	__m128 b1 = _mm_setzero_ps(), b2 = b1;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *j0 = L->img + (ptrdiff_t)(iy + r) * L->stride + ix,
+			      *j1 = j0 + L->stride;
+		__m128i s1 = z, s2 = z;
+		for (int c = 0; c < pad; c += 8) {
+			__m128i diff =
+			    _mm_sub_epi16(interp8(j0, j1, c, w0, w1),
+					  _mm_loadu_si128((const __m128i *)(T->t + r * pad + c)));
+			s1 = _mm_add_epi32(
+			    s1, _mm_madd_epi16(
+				    diff, _mm_loadu_si128((const __m128i *)(T->x + r * pad + c))));
+			s2 = _mm_add_epi32(
+			    s2, _mm_madd_epi16(
+				    diff, _mm_loadu_si128((const __m128i *)(T->y + r * pad + c))));
+		}
+		b1 = _mm_add_ps(b1, _mm_cvtepi32_ps(s1));
+		b2 = _mm_add_ps(b2, _mm_cvtepi32_ps(s2));
+	}
+	_mm_storeu_ps(b[0], b1);
+	_mm_storeu_ps(b[1], b2);
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+/*
+ * AVX2 (chosen at run time, mvod_lk_flow): 16 pixels a vector. A row's 16-pixel blocks give 8
+ * lane sums, the second 4 of them columns 8 .. 15's pairs, folded onto the first 4 as exact
+ * integers before the row's float addition: the same lane sums as the 8-pixel paths.
+ */
+#define HAVE_AVX2 1
+#define AVX2 __attribute__((target("avx2")))
+
+/* Lanes 0 .. k - 1 of 16 int16: all ones; the rest zero. */
+AVX2 static __m256i first_lanes16(int k)
+{
+	static const int16_t ones_zeros[32] = {-1, -1, -1, -1, -1, -1, -1, -1,
+					       -1, -1, -1, -1, -1, -1, -1, -1};
+	return _mm256_loadu_si256((const __m256i *)(ones_zeros + 16 - k));
+}
+
+/* The sums of both halves' lanes. */
+AVX2 static __m128i fold(__m256i v)
+{
+	return _mm_add_epi32(_mm256_castsi256_si128(v), _mm256_extracti128_si256(v, 1));
+}
+
+/* Lane j: v00[j] iw[0] + v01[j] iw[1] + v10[j] iw[2] + v11[j] iw[3], descaled by bits. */
+AVX2 static __m256i blend16(__m256i v00, __m256i v01, __m256i v10, __m256i v11, __m256i w0,
+			    __m256i w1, int bits)
+{
+	const __m256i half = _mm256_set1_epi32(1 << (bits - 1));
+	__m256i t0 = _mm256_add_epi32(_mm256_madd_epi16(_mm256_unpacklo_epi16(v00, v01), w0),
+				      _mm256_madd_epi16(_mm256_unpacklo_epi16(v10, v11), w1));
+	__m256i t1 = _mm256_add_epi32(_mm256_madd_epi16(_mm256_unpackhi_epi16(v00, v01), w0),
+				      _mm256_madd_epi16(_mm256_unpackhi_epi16(v10, v11), w1));
+	/* unpack and pack both work within halves: the order comes back */
+	return _mm256_packs_epi32(_mm256_srai_epi32(_mm256_add_epi32(t0, half), bits),
+				  _mm256_srai_epi32(_mm256_add_epi32(t1, half), bits));
+}
+
+AVX2 static __m256i load16(const uint8_t *p)
+{
+	return _mm256_cvtepu8_epi16(_mm_loadu_si128((const __m128i *)p));
+}
+
+/* interp() of pixels c .. c + 15. */
+AVX2 static __m256i interp16(const uint8_t *j0, const uint8_t *j1, int c, __m256i w0, __m256i w1)
+{
+	return blend16(load16(j0 + c), load16(j0 + c + 1), load16(j1 + c), load16(j1 + c + 1), w0,
+		       w1, W_BITS - FRAC);
+}
+
+/* interp_deriv() of pixels c .. c + 7 as (d/dx, d/dy) pairs. */
+AVX2 static __m256i interp_deriv8(const int16_t *d0, const int16_t *d1, int c, __m256i w0,
+				  __m256i w1)
+{
+	return blend16(_mm256_loadu_si256((const __m256i *)(d0 + 2 * c)),
+		       _mm256_loadu_si256((const __m256i *)(d0 + 2 * c + 2)),
+		       _mm256_loadu_si256((const __m256i *)(d1 + 2 * c)),
+		       _mm256_loadu_si256((const __m256i *)(d1 + 2 * c + 2)), w0, w1, W_BITS);
+}
+
+AVX2 static void pair_weights16(const int iw[4], __m256i *w0, __m256i *w1)
+{
+	*w0 = _mm256_set1_epi32((int)((uint32_t)(iw[0] & 0xffff) | (uint32_t)iw[1] << 16));
+	*w1 = _mm256_set1_epi32((int)((uint32_t)(iw[2] & 0xffff) | (uint32_t)iw[3] << 16));
+}
+
+AVX2 static void prep_avx2(const struct mvod_lk_level *L, int tx, int ty, const int iw[4], int win,
+			   int pad, struct tmpl *T, float a[3][4])
+{
+	const __m128i tail = first_lanes(win - (pad - 8));
+	const __m256i tail16 = first_lanes16(win - (pad - 16 > 0 ? pad - 16 : 0));
+	__m128i w0, w1;
+	__m256i v0, v1;
+	pair_weights(iw, &w0, &w1);
+	pair_weights16(iw, &v0, &v1);
+	__m128 axx = _mm_setzero_ps(), ayy = axx, axy = axx;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *s0 = L->img + (ptrdiff_t)(ty + r) * L->stride + tx,
+			      *s1 = s0 + L->stride;
+		const int16_t *e0 = L->deriv + (ptrdiff_t)(ty + r) * L->dstride + 2 * tx;
+		const int16_t *e1 = e0 + L->dstride;
+		__m256i hxx = _mm256_setzero_si256(), hyy = hxx, hxy = hxx;
+		int c = 0;
+		for (; c + 16 <= pad; c += 16) {
+			__m256i t = interp16(s0, s1, c, v0, v1);
+			__m256i d0 = interp_deriv8(e0, e1, c, v0, v1),
+				d1 = interp_deriv8(e0, e1, c + 8, v0, v1);
+			__m256i x =
+			    _mm256_packs_epi32(_mm256_srai_epi32(_mm256_slli_epi32(d0, 16), 16),
+					       _mm256_srai_epi32(_mm256_slli_epi32(d1, 16), 16));
+			__m256i y = _mm256_packs_epi32(_mm256_srai_epi32(d0, 16),
+						       _mm256_srai_epi32(d1, 16));
+			/* packs took d0's and d1's halves in turn: pixels 0-3, 8-11, 4-7, 12-15 */
+			x = _mm256_permute4x64_epi64(x, 0xd8);
+			y = _mm256_permute4x64_epi64(y, 0xd8);
+			if (c + 16 == pad) {
+				t = _mm256_and_si256(t, tail16);
+				x = _mm256_and_si256(x, tail16);
+				y = _mm256_and_si256(y, tail16);
+			}
+			_mm256_storeu_si256((__m256i *)(T->t + r * pad + c), t);
+			_mm256_storeu_si256((__m256i *)(T->x + r * pad + c), x);
+			_mm256_storeu_si256((__m256i *)(T->y + r * pad + c), y);
+			hxx = _mm256_add_epi32(hxx, _mm256_madd_epi16(x, x));
+			hyy = _mm256_add_epi32(hyy, _mm256_madd_epi16(y, y));
+			hxy = _mm256_add_epi32(hxy, _mm256_madd_epi16(x, y));
+		}
+		__m128i sxx = fold(hxx), syy = fold(hyy), sxy = fold(hxy), x, y;
+		if (c < pad) {
+			split_pairs(interp_deriv4(e0, e1, c, w0, w1),
+				    interp_deriv4(e0, e1, c + 4, w0, w1), &x, &y);
+			prep_store(T, r, c, pad, tail, interp8(s0, s1, c, w0, w1), x, y, &sxx, &syy,
+				   &sxy);
+		}
+		axx = _mm_add_ps(axx, _mm_cvtepi32_ps(sxx));
+		ayy = _mm_add_ps(ayy, _mm_cvtepi32_ps(syy));
+		axy = _mm_add_ps(axy, _mm_cvtepi32_ps(sxy));
+	}
+	_mm_storeu_ps(a[0], axx);
+	_mm_storeu_ps(a[1], ayy);
+	_mm_storeu_ps(a[2], axy);
+}
+
+AVX2 static void mismatch_avx2(const struct mvod_lk_level *L, int ix, int iy, const int iw[4],
+			       int win, int pad, const struct tmpl *T, float b[2][4])
+{
+	__m128i w0, w1;
+	__m256i v0, v1;
+	pair_weights(iw, &w0, &w1);
+	pair_weights16(iw, &v0, &v1);
+	__m128 b1 = _mm_setzero_ps(), b2 = b1;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *j0 = L->img + (ptrdiff_t)(iy + r) * L->stride + ix,
+			      *j1 = j0 + L->stride;
+		const int16_t *t = T->t + r * pad, *x = T->x + r * pad, *y = T->y + r * pad;
+		__m256i h1 = _mm256_setzero_si256(), h2 = h1;
+		int c = 0;
+		for (; c + 16 <= pad; c += 16) {
+			__m256i diff =
+			    _mm256_sub_epi16(interp16(j0, j1, c, v0, v1),
+					     _mm256_loadu_si256((const __m256i *)(t + c)));
+			h1 = _mm256_add_epi32(
+			    h1,
+			    _mm256_madd_epi16(diff, _mm256_loadu_si256((const __m256i *)(x + c))));
+			h2 = _mm256_add_epi32(
+			    h2,
+			    _mm256_madd_epi16(diff, _mm256_loadu_si256((const __m256i *)(y + c))));
+		}
+		__m128i s1 = fold(h1), s2 = fold(h2);
+		if (c < pad) {
+			__m128i diff = _mm_sub_epi16(interp8(j0, j1, c, w0, w1),
+						     _mm_loadu_si128((const __m128i *)(t + c)));
+			s1 = _mm_add_epi32(
+			    s1, _mm_madd_epi16(diff, _mm_loadu_si128((const __m128i *)(x + c))));
+			s2 = _mm_add_epi32(
+			    s2, _mm_madd_epi16(diff, _mm_loadu_si128((const __m128i *)(y + c))));
+		}
+		b1 = _mm_add_ps(b1, _mm_cvtepi32_ps(s1));
+		b2 = _mm_add_ps(b2, _mm_cvtepi32_ps(s2));
+	}
+	_mm_storeu_ps(b[0], b1);
+	_mm_storeu_ps(b[1], b2);
+}
+#endif
+
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+/* Lanes 0 .. k - 1 of 8 int16: all ones; the rest zero. */
+static int16x8_t first_lanes(int k)
+{
+	static const int16_t ones_zeros[16] = {-1, -1, -1, -1, -1, -1, -1, -1};
+	return vld1q_s16(ones_zeros + 8 - k);
+}
+
+/* SSE2's multiply-add: lane l = a[2l] b[2l] + a[2l + 1] b[2l + 1]. */
+static int32x4_t madd(int16x8_t a, int16x8_t b)
+{
+	return vpaddq_s32(vmull_s16(vget_low_s16(a), vget_low_s16(b)), vmull_high_s16(a, b));
+}
+
+/* Lane j: a[j] w0 + b[j] w1 + c[j] w2 + d[j] w3, rounded and shifted right by bits. */
+static int16x8_t blend(int16x8_t a, int16x8_t b, int16x8_t c, int16x8_t d, const int16_t w[4],
+		       int bits)
+{
+	int32x4_t lo = vmull_n_s16(vget_low_s16(a), w[0]), hi = vmull_high_n_s16(a, w[0]);
+	lo = vmlal_n_s16(lo, vget_low_s16(b), w[1]);
+	hi = vmlal_high_n_s16(hi, b, w[1]);
+	lo = vmlal_n_s16(lo, vget_low_s16(c), w[2]);
+	hi = vmlal_high_n_s16(hi, c, w[2]);
+	lo = vmlal_n_s16(lo, vget_low_s16(d), w[3]);
+	hi = vmlal_high_n_s16(hi, d, w[3]);
+	int32x4_t r = vdupq_n_s32(1 << (bits - 1));
+	/* (v + 2^(bits-1)) >> bits, as descale(); the sums fit int32, their halves int16 */
+	lo = vshlq_s32(vaddq_s32(lo, r), vdupq_n_s32(-bits));
+	hi = vshlq_s32(vaddq_s32(hi, r), vdupq_n_s32(-bits));
+	return vcombine_s16(vmovn_s32(lo), vmovn_s32(hi));
+}
+
+static int16x8_t load8(const uint8_t *p)
+{
+	return vreinterpretq_s16_u16(vmovl_u8(vld1_u8(p)));
+}
+
+/* interp() of pixels c .. c + 7 (reads c .. c + 8 of both rows). */
+static int16x8_t interp8(const uint8_t *j0, const uint8_t *j1, int c, const int16_t w[4])
+{
+	return blend(load8(j0 + c), load8(j0 + c + 1), load8(j1 + c), load8(j1 + c + 1), w,
+		     W_BITS - FRAC);
+}
+
+/* interp_deriv() of pixels c .. c + 3 as (d/dx, d/dy) pairs. */
+static int16x8_t interp_deriv4(const int16_t *d0, const int16_t *d1, int c, const int16_t w[4])
+{
+	return blend(vld1q_s16(d0 + 2 * c), vld1q_s16(d0 + 2 * c + 2), vld1q_s16(d1 + 2 * c),
+		     vld1q_s16(d1 + 2 * c + 2), w, W_BITS);
+}
+
+static void prep_vec(const struct mvod_lk_level *L, int tx, int ty, const int iw[4], int win,
+		     int pad, struct tmpl *T, float a[3][4])
+{
+	const int16x8_t tail = first_lanes(win - (pad - 8));
+	const int16_t w[4] = {(int16_t)iw[0], (int16_t)iw[1], (int16_t)iw[2], (int16_t)iw[3]};
+	float32x4_t axx = vdupq_n_f32(0), ayy = axx, axy = axx;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *s0 = L->img + (ptrdiff_t)(ty + r) * L->stride + tx,
+			      *s1 = s0 + L->stride;
+		const int16_t *e0 = L->deriv + (ptrdiff_t)(ty + r) * L->dstride + 2 * tx;
+		const int16_t *e1 = e0 + L->dstride;
+		int32x4_t sxx = vdupq_n_s32(0), syy = sxx, sxy = sxx;
+		for (int c = 0; c < pad; c += 8) {
+			int16x8_t t = interp8(s0, s1, c, w), d0 = interp_deriv4(e0, e1, c, w);
+			int16x8_t d1 = interp_deriv4(e0, e1, c + 4, w);
+			int16x8_t x = vuzp1q_s16(d0, d1), y = vuzp2q_s16(d0, d1);
+			if (c + 8 == pad) {
+				t = vandq_s16(t, tail);
+				x = vandq_s16(x, tail);
+				y = vandq_s16(y, tail);
+			}
+			vst1q_s16(T->t + r * pad + c, t);
+			vst1q_s16(T->x + r * pad + c, x);
+			vst1q_s16(T->y + r * pad + c, y);
+			sxx = vaddq_s32(sxx, madd(x, x));
+			syy = vaddq_s32(syy, madd(y, y));
+			sxy = vaddq_s32(sxy, madd(x, y));
+		}
+		axx = vaddq_f32(axx, vcvtq_f32_s32(sxx));
+		ayy = vaddq_f32(ayy, vcvtq_f32_s32(syy));
+		axy = vaddq_f32(axy, vcvtq_f32_s32(sxy));
+	}
+	vst1q_f32(a[0], axx);
+	vst1q_f32(a[1], ayy);
+	vst1q_f32(a[2], axy);
+}
+
+static void mismatch_vec(const struct mvod_lk_level *L, int ix, int iy, const int iw[4], int win,
+			 int pad, const struct tmpl *T, float b[2][4])
+{
+	const int16_t w[4] = {(int16_t)iw[0], (int16_t)iw[1], (int16_t)iw[2], (int16_t)iw[3]};
+	float32x4_t b1 = vdupq_n_f32(0), b2 = b1;
+	for (int r = 0; r < win; r++) {
+		const uint8_t *j0 = L->img + (ptrdiff_t)(iy + r) * L->stride + ix,
+			      *j1 = j0 + L->stride;
+		int32x4_t s1 = vdupq_n_s32(0), s2 = s1;
+		for (int c = 0; c < pad; c += 8) {
+			int16x8_t diff =
+			    vsubq_s16(interp8(j0, j1, c, w), vld1q_s16(T->t + r * pad + c));
+			s1 = vaddq_s32(s1, madd(diff, vld1q_s16(T->x + r * pad + c)));
+			s2 = vaddq_s32(s2, madd(diff, vld1q_s16(T->y + r * pad + c)));
+		}
+		b1 = vaddq_f32(b1, vcvtq_f32_s32(s1));
+		b2 = vaddq_f32(b2, vcvtq_f32_s32(s2));
+	}
+	vst1q_f32(b[0], b1);
+	vst1q_f32(b[1], b2);
+}
+#else
+#define prep_vec prep_plain
+#define mismatch_vec mismatch_plain
+#endif
+
+/* A path's two kernels. */
+struct kernels {
+	void (*prep)(const struct mvod_lk_level *L, int tx, int ty, const int iw[4], int win,
+		     int pad, struct tmpl *T, float a[3][4]);
+	void (*mismatch)(const struct mvod_lk_level *L, int ix, int iy, const int iw[4], int win,
+			 int pad, const struct tmpl *T, float b[2][4]);
+};
+
+/* One point through every level (OpenCV's LKTrackerInvoker). */
+static void track(const struct mvod_lk_level *I, const struct mvod_lk_level *J,
+		  const struct mvod_lk_params *p, const float *from, float *to, uint8_t *ok,
+		  const struct kernels *k, struct tmpl *T)
+{
+	int win = p->win, pad = (win + 7) & ~7, status = 1;
+	float half = (float)(win - 1) * 0.5f, nx = 0, ny = 0;
+	double eps2 = (double)p->eps_px * p->eps_px;
+	for (int lv = p->levels; lv >= 0; lv--) {
+		const struct mvod_lk_level *li = &I[lv], *lj = &J[lv];
+		float sc = (float)(1.0 / (1 << lv)), px = from[0] * sc, py = from[1] * sc;
+		if (lv == p->levels) {
+			nx = to[0] * sc;
+			ny = to[1] * sc;
+		} else {
+			nx *= 2;
+			ny *= 2;
+		}
+		float wx = px - half, wy = py - half;
+		int tx = (int)floorf(wx), ty = (int)floorf(wy), iw[4];
+		if (!fits(li, tx, ty, pad + 1, win + 1)) {
+			status &= lv > 0;
+			continue;
+		}
+		weights(wx - (float)tx, wy - (float)ty, iw);
+		float a[3][4];
+		k->prep(li, tx, ty, iw, win, pad, T, a);
+		float a11 = lanes_sum(a[0]) * FLT_SCALE, a22 = lanes_sum(a[1]) * FLT_SCALE;
+		float a12 = lanes_sum(a[2]) * FLT_SCALE, det = a11 * a22 - a12 * a12;
+		float min_eig = (a22 + a11 - sqrtf((a11 - a22) * (a11 - a22) + 4.f * a12 * a12)) /
+				(float)(2 * win * win);
+		if (min_eig < MIN_EIG || det < FLT_EPSILON) {
+			status &= lv > 0;
+			continue;
+		}
+		float inv = 1.f / det, pdx = 0, pdy = 0;
+		for (int j = 0; j < p->iterations; j++) {
+			float fx = nx - half, fy = ny - half;
+			int ix = (int)floorf(fx), iy = (int)floorf(fy);
+			if (!fits(lj, ix, iy, pad + 1, win + 1)) {
+				status &= lv > 0;
+				break;
+			}
+			weights(fx - (float)ix, fy - (float)iy, iw);
+			float b[2][4];
+			k->mismatch(lj, ix, iy, iw, win, pad, T, b);
+			float b1 = lanes_sum(b[0]) * FLT_SCALE, b2 = lanes_sum(b[1]) * FLT_SCALE;
+			float dx = (a12 * b2 - a22 * b1) * inv, dy = (a12 * b1 - a11 * b2) * inv;
+			nx += dx;
+			ny += dy;
+			if ((double)dx * dx + (double)dy * dy <= eps2)
+				break;
+			if (j > 0 && fabsf(dx + pdx) < OSCILLATION_PX &&
+			    fabsf(dy + pdy) < OSCILLATION_PX) {
+				nx -= dx * 0.5f;
+				ny -= dy * 0.5f;
+				break;
+			}
+			pdx = dx;
+			pdy = dy;
+		}
+	}
+	to[0] = nx;
+	to[1] = ny;
+	*ok = (uint8_t)status;
+}
+
+int mvod_lk_flow_on(enum mvod_lk_path path, const struct mvod_lk_level *I,
+		    const struct mvod_lk_level *J, const struct mvod_lk_params *p,
+		    const float *from, float *to, int n, uint8_t *ok)
+{
+	static const struct kernels plain = {prep_plain, mismatch_plain},
+				    vec = {prep_vec, mismatch_vec};
+	const struct kernels *k = path == MVOD_LK_PLAIN ? &plain : &vec;
+	if (path == MVOD_LK_AVX2) {
+#ifdef HAVE_AVX2
+		static const struct kernels avx2 = {prep_avx2, mismatch_avx2};
+		if (!__builtin_cpu_supports("avx2"))
+			return -ENOTSUP;
+		k = &avx2;
+#else
+		return -ENOTSUP;
+#endif
+	}
+	struct tmpl T;
+	for (int i = 0; i < n; i++)
+		track(I, J, p, from + 2 * i, to + 2 * i, ok + i, k, &T);
+	return 0;
+}
+
+void mvod_lk_flow(const struct mvod_lk_level *I, const struct mvod_lk_level *J,
+		  const struct mvod_lk_params *p, const float *from, float *to, int n, uint8_t *ok)
+{
+	if (mvod_lk_flow_on(MVOD_LK_AVX2, I, J, p, from, to, n, ok))
+		mvod_lk_flow_on(MVOD_LK_VECTOR, I, J, p, from, to, n, ok);
+}

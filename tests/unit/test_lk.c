@@ -1,0 +1,269 @@
+/*
+ * The Lucas-Kanade tracker of vo/lk.h on pyramids built here (OpenCV's layout: bordered levels,
+ * Scharr derivatives as (d/dx, d/dy) pairs): every vector path this build and machine have
+ * (SSE2 and AVX2 on x86-64, NEON on arm64) gives exactly what the plain C gives; a smooth
+ * texture moved by a known sub-pixel shift is tracked to it; a flat patch and a window that
+ * leaves the image fail. Needs only the C library and cmocka,
+ * so make cross-arm64 runs it under qemu too.
+ */
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "vo/lk.h"
+
+enum { W = 160, H = 120, BORDER = 32, LEVELS = 2 };
+
+/* One level: pixels and derivatives over the level and its border. */
+struct level {
+	uint8_t img[(H + 2 * BORDER) * (W + 2 * BORDER)];
+	int16_t deriv[2 * (H + 2 * BORDER) * (W + 2 * BORDER)];
+	int w, h;
+};
+
+static struct level I_[LEVELS + 1], J_[LEVELS + 1];
+static struct mvod_lk_level I[LEVELS + 1], J[LEVELS + 1];
+
+static uint64_t next_word(uint64_t *s)
+{
+	*s ^= *s << 13;
+	*s ^= *s >> 7;
+	*s ^= *s << 17;
+	return *s;
+}
+
+/* Scharr derivatives of every pixel but the outermost ring (zero there), as OpenCV scales them. */
+static void scharr(struct level *L, struct mvod_lk_level *out)
+{
+	int sw = L->w + 2 * BORDER, sh = L->h + 2 * BORDER;
+	memset(L->deriv, 0, sizeof(L->deriv));
+	for (int y = 1; y < sh - 1; y++)
+		for (int x = 1; x < sw - 1; x++) {
+			const uint8_t *p = L->img + y * sw + x;
+			int dx = 3 * (p[-sw + 1] - p[-sw - 1]) + 10 * (p[1] - p[-1]) +
+				 3 * (p[sw + 1] - p[sw - 1]);
+			int dy = 3 * (p[sw - 1] - p[-sw - 1]) + 10 * (p[sw] - p[-sw]) +
+				 3 * (p[sw + 1] - p[-sw + 1]);
+			L->deriv[2 * (y * sw + x)] = (int16_t)dx;
+			L->deriv[2 * (y * sw + x) + 1] = (int16_t)dy;
+		}
+	*out = (struct mvod_lk_level){.img = L->img + BORDER * sw + BORDER,
+				      .deriv = L->deriv + 2 * (BORDER * sw + BORDER),
+				      .stride = sw,
+				      .dstride = 2 * sw,
+				      .w = L->w,
+				      .h = L->h,
+				      .border = BORDER};
+}
+
+/*
+ * A smooth texture at level-0 position (x, y): three waves of 24-61 pixels (3-7.6 at level 2,
+ * above its Nyquist limit of 2), grey levels 28-228.
+ */
+static double texture(double x, double y)
+{
+	return 128 + 40 * sin(x / 7.0 + 0.3) * cos(y / 9.7) + 35 * sin((x + 2 * y) / 5.3) +
+	       25 * cos((3 * x - y) / 4.1 + 1.0);
+}
+
+/* Level l of the texture moved by (dx, dy) level-0 pixels: pixel (x, y) samples (x 2^l, y 2^l). */
+static void render(struct level *L, struct mvod_lk_level *out, int l, double dx, double dy)
+{
+	L->w = W >> l;
+	L->h = H >> l;
+	int sw = L->w + 2 * BORDER, sh = L->h + 2 * BORDER;
+	for (int y = 0; y < sh; y++)
+		for (int x = 0; x < sw; x++) {
+			double v = texture((x - BORDER) * (double)(1 << l) - dx,
+					   (y - BORDER) * (double)(1 << l) - dy);
+			L->img[y * sw + x] = (uint8_t)lrint(v);
+		}
+	scharr(L, out);
+}
+
+static void render_pair(double dx, double dy)
+{
+	for (int l = 0; l <= LEVELS; l++) {
+		render(&I_[l], &I[l], l, 0, 0);
+		render(&J_[l], &J[l], l, dx, dy);
+	}
+}
+
+enum { N = 200 };
+
+/* Which paths compare_paths ran (bit path): the log says which this machine tested. */
+static int paths_compared;
+
+/* Every path this build and machine have on the same points: equal to the plain C bit for bit. */
+static void compare_paths(const struct mvod_lk_params *p, const float *from, const float *guess)
+{
+	float a[2 * N], b[2 * N];
+	uint8_t oka[N], okb[N];
+	memcpy(b, guess, sizeof(b));
+	assert_int_equal(mvod_lk_flow_on(MVOD_LK_PLAIN, I, J, p, from, b, N, okb), 0);
+	for (int path = MVOD_LK_VECTOR; path <= MVOD_LK_AVX2; path++) {
+		memcpy(a, guess, sizeof(a));
+		if (mvod_lk_flow_on((enum mvod_lk_path)path, I, J, p, from, a, N, oka) == -ENOTSUP)
+			continue;
+		for (int i = 0; i < N; i++)
+			if (memcmp(&a[2 * i], &b[2 * i], 2 * sizeof(float)) || oka[i] != okb[i])
+				fail_msg("path %d, win %d, point %d: (%.9g, %.9g) %d, plain (%.9g, "
+					 "%.9g) %d",
+					 path, p->win, i, a[2 * i], a[2 * i + 1], oka[i], b[2 * i],
+					 b[2 * i + 1], okb[i]);
+		paths_compared |= 1 << path;
+	}
+}
+
+/* Random points inside the image, guesses up to 6 pixels from them. */
+static void random_points(uint64_t *seed, float *from, float *guess)
+{
+	for (int i = 0; i < N; i++) {
+		from[2 * i] = 4 + (float)(next_word(seed) % 15000) / 100.0f;
+		from[2 * i + 1] = 4 + (float)(next_word(seed) % 11000) / 100.0f;
+		guess[2 * i] = from[2 * i] + (float)((int)(next_word(seed) % 1200) - 600) / 100.0f;
+		guess[2 * i + 1] =
+		    from[2 * i + 1] + (float)((int)(next_word(seed) % 1200) - 600) / 100.0f;
+	}
+}
+
+static void test_vector_equals_plain(void **state)
+{
+	(void)state;
+	static const int wins[] = {3, 8, 9, 15, 21, 24, MVOD_LK_MAX_WIN};
+	uint64_t seed = 0x9e3779b97f4a7c15u;
+	float from[2 * N], guess[2 * N];
+	for (int k = 0; k < 3; k++) {
+		/*
+		 * Random bytes (k = 0: every difference turns up), binary 0/255 (k = 1: the
+		 * largest products, the sums' worst case), the moved texture (k = 2: converging
+		 * tracks).
+		 */
+		for (int l = 0; l <= LEVELS; l++) {
+			if (k == 2) {
+				render(&I_[l], &I[l], l, 0, 0);
+				render(&J_[l], &J[l], l, 2.7, -1.3);
+				continue;
+			}
+			struct level *pair[2] = {&I_[l], &J_[l]};
+			struct mvod_lk_level *out[2] = {&I[l], &J[l]};
+			for (int m = 0; m < 2; m++) {
+				pair[m]->w = W >> l;
+				pair[m]->h = H >> l;
+				for (size_t b = 0; b < sizeof(pair[m]->img); b++) {
+					uint8_t v = (uint8_t)next_word(&seed);
+					pair[m]->img[b] = k == 0 ? v : v & 1 ? 255 : 0;
+				}
+				scharr(pair[m], out[m]);
+			}
+		}
+		random_points(&seed, from, guess);
+		for (size_t w = 0; w < sizeof(wins) / sizeof(wins[0]); w++)
+			for (int levels = 0; levels <= LEVELS; levels += LEVELS) {
+				struct mvod_lk_params p = {.win = wins[w],
+							   .levels = levels,
+							   .iterations = 10,
+							   .eps_px = 0.03f};
+				compare_paths(&p, from, guess);
+			}
+	}
+	print_message("compared with the plain C:%s%s\n",
+		      paths_compared & 1 << MVOD_LK_VECTOR ? " vector (SSE2 or NEON)" : "",
+		      paths_compared & 1 << MVOD_LK_AVX2 ? " AVX2" : "");
+	assert_true(paths_compared & 1 << MVOD_LK_VECTOR);
+}
+
+/*
+ * The texture moved by (2.7, -1.3) pixels, tracked from no guess (the points themselves) on
+ * 3 levels: every point converges, to within BOUND_PX of the truth.
+ */
+static void track_shift(int win, double bound_px)
+{
+	const double dx = 2.7, dy = -1.3;
+	render_pair(dx, dy);
+	float from[2 * N], to[2 * N];
+	uint8_t ok[N];
+	int n = 0;
+	for (int y = 20; y <= H - 20 && n < N; y += 8)
+		for (int x = 20; x <= W - 20 && n < N; x += 8, n++) {
+			/* Off the pixel grid: the template is interpolated. */
+			from[2 * n] = to[2 * n] = (float)x + 0.37f;
+			from[2 * n + 1] = to[2 * n + 1] = (float)y + 0.61f;
+		}
+	struct mvod_lk_params p = {.win = win, .levels = LEVELS, .iterations = 10, .eps_px = 0.03f};
+	mvod_lk_flow(I, J, &p, from, to, n, ok);
+	double worst = 0;
+	for (int i = 0; i < n; i++) {
+		assert_int_equal(ok[i], 1);
+		worst = fmax(worst, hypot(to[2 * i] - from[2 * i] - dx,
+					  to[2 * i + 1] - from[2 * i + 1] - dy));
+	}
+	print_message("win %d: %d points, worst error %.4f px\n", win, n, worst);
+	assert_true(worst < bound_px);
+}
+
+/*
+ * Bounds: about twice the worst error measured (0.009 px at 21 px, 0.029 at 9). What is left is
+ * the texture's rounding to whole grey levels, bilinear interpolation of waves of 24 px and
+ * more, and the stopping rule (a step under 0.03 px ends a level); a 9 px window averages less
+ * of the first two than a 21 px one.
+ */
+static void test_subpixel_shift(void **state)
+{
+	(void)state;
+	track_shift(21, 0.02);
+	track_shift(9, 0.06);
+}
+
+/* A flat image: no gradient, the minimum eigenvalue test fails every point. */
+static void test_flat_fails(void **state)
+{
+	(void)state;
+	for (int l = 0; l <= LEVELS; l++) {
+		struct level *pair[2] = {&I_[l], &J_[l]};
+		struct mvod_lk_level *out[2] = {&I[l], &J[l]};
+		for (int m = 0; m < 2; m++) {
+			pair[m]->w = W >> l;
+			pair[m]->h = H >> l;
+			memset(pair[m]->img, 100, sizeof(pair[m]->img));
+			scharr(pair[m], out[m]);
+		}
+	}
+	float from[2] = {80.5f, 60.5f}, to[2] = {80.5f, 60.5f};
+	uint8_t ok = 1;
+	struct mvod_lk_params p = {.win = 21, .levels = LEVELS, .iterations = 10, .eps_px = 0.03f};
+	mvod_lk_flow(I, J, &p, from, to, 1, &ok);
+	assert_int_equal(ok, 0);
+}
+
+/* A guess whose window leaves the level and its border fails, where a near one converges. */
+static void test_outside_fails(void **state)
+{
+	(void)state;
+	render_pair(2.7, -1.3);
+	float from[4] = {80.37f, 60.61f, 80.37f, 60.61f};
+	float to[4] = {80.37f + 2.7f, 60.61f - 1.3f, (float)(W + BORDER), 60.61f};
+	uint8_t ok[2] = {0, 1};
+	struct mvod_lk_params p = {.win = 21, .levels = 0, .iterations = 10, .eps_px = 0.03f};
+	mvod_lk_flow(I, J, &p, from, to, 2, ok);
+	assert_int_equal(ok[0], 1);
+	assert_int_equal(ok[1], 0);
+}
+
+int main(void)
+{
+	const struct CMUnitTest tests[] = {
+	    cmocka_unit_test(test_vector_equals_plain),
+	    cmocka_unit_test(test_subpixel_shift),
+	    cmocka_unit_test(test_flat_fails),
+	    cmocka_unit_test(test_outside_fails),
+	};
+	return cmocka_run_group_tests(tests, NULL, NULL);
+}
