@@ -1,7 +1,7 @@
 /*
  * The KLT front end's bookkeeping in plain C: tracks in fixed-capacity arrays, the
  * forward-backward check, Harris ranking of FAST corners and their spread over a grid.
- * Lucas-Kanade is lk.c's; OpenCV's part (pyramids with derivatives, FAST) is behind klt_shim.h.
+ * Lucas-Kanade is lk.c's; OpenCV's part (pyramid levels, FAST) is behind klt_shim.h.
  */
 #include "klt.h"
 

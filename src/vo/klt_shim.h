@@ -1,6 +1,7 @@
 /*
- * The OpenCV door of the KLT front end (klt.c): image pyramids with their Scharr derivatives,
- * built into buffers kept from frame to frame, for lk.c's Lucas-Kanade, and FAST corners.
+ * The OpenCV door of the KLT front end (klt.c): image pyramids (OpenCV's levels, lk.c's Scharr
+ * derivatives) built into buffers kept from frame to frame, for lk.c's Lucas-Kanade, and FAST
+ * corners.
  * Plain C; every function catches every exception and returns 0 or -errno.
  */
 #ifndef MVOD_KLT_SHIM_H
@@ -20,6 +21,7 @@ struct mvod_klt_cv;
 /*
  * Pyramids of levels + 1 levels for width x height grey frames, with borders of win pixels
  * (BORDER_REFLECT_101; the derivatives' zero); FAST keeps at most fast_cap corners per frame.
+ * Every buffer is sized here: a push allocates nothing after the second frame.
  */
 int mvod_klt_cv_create(int width, int height, int win, int levels, int fast_cap,
 		       struct mvod_klt_cv **out);

@@ -56,11 +56,23 @@ static int descale(int v, int bits)
 }
 
 /* Bilinear weights of W_BITS bits for fractions (a, b), as OpenCV rounds them. */
+/* v rounded to the nearest integer, ties to even (lrintf's default), in one instruction. */
+static int round_int(float v)
+{
+#if defined(__SSE2__)
+	return _mm_cvtss_si32(_mm_set_ss(v));
+#elif defined(__ARM_NEON) && defined(__aarch64__)
+	return vcvtns_s32_f32(v);
+#else
+	return (int)lrintf(v);
+#endif
+}
+
 static void weights(float a, float b, int iw[4])
 {
-	iw[0] = (int)lrintf((1.f - a) * (1.f - b) * (1 << W_BITS));
-	iw[1] = (int)lrintf(a * (1.f - b) * (1 << W_BITS));
-	iw[2] = (int)lrintf((1.f - a) * b * (1 << W_BITS));
+	iw[0] = round_int((1.f - a) * (1.f - b) * (1 << W_BITS));
+	iw[1] = round_int(a * (1.f - b) * (1 << W_BITS));
+	iw[2] = round_int((1.f - a) * b * (1 << W_BITS));
 	iw[3] = (1 << W_BITS) - iw[0] - iw[1] - iw[2];
 }
 
@@ -136,6 +148,29 @@ static void mismatch_plain(const struct mvod_lk_level *L, int ix, int iy, const 
 			b[0][l] += (float)s1[l];
 			b[1][l] += (float)s2[l];
 		}
+	}
+}
+
+/*
+ * Scharr derivatives, OpenCV's calcSharrDeriv to the bit: rows and columns past the edges
+ * reflected about them (101), the vertical pass (3, 10, 3 and -1, 0, 1) into t0, t1 (a row of
+ * w + 2, one before and one after), the horizontal one out as (d/dx, d/dy) pairs. Every value
+ * fits int16 (at most 16 x 255).
+ */
+static void scharr_vertical_plain(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2, int x,
+				  int w, int16_t *t0, int16_t *t1)
+{
+	for (; x < w; x++) {
+		t0[x] = (int16_t)((s0[x] + s2[x]) * 3 + s1[x] * 10);
+		t1[x] = (int16_t)(s2[x] - s0[x]);
+	}
+}
+
+static void scharr_horizontal_plain(const int16_t *t0, const int16_t *t1, int x, int w, int16_t *d)
+{
+	for (; x < w; x++) {
+		d[2 * x] = (int16_t)(t0[x + 1] - t0[x - 1]);
+		d[2 * x + 1] = (int16_t)((t1[x + 1] + t1[x - 1]) * 3 + t1[x] * 10);
 	}
 }
 
@@ -275,6 +310,42 @@ static void mismatch_vec(const struct mvod_lk_level *L, int ix, int iy, const in
 	_mm_storeu_ps(b[0], b1);
 	_mm_storeu_ps(b[1], b2);
 }
+/* The Scharr passes 8 pixels at a time from x on; returns where they stopped. */
+static int scharr_vertical_vec(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2, int w,
+			       int16_t *t0, int16_t *t1)
+{
+	const __m128i z = _mm_setzero_si128(), three = _mm_set1_epi16(3), ten = _mm_set1_epi16(10);
+	int x = 0;
+	for (; x + 8 <= w; x += 8) {
+		__m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x)), z);
+		__m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x)), z);
+		__m128i c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s2 + x)), z);
+		_mm_storeu_si128((__m128i *)(t0 + x),
+				 _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), three),
+					       _mm_mullo_epi16(b, ten)));
+		_mm_storeu_si128((__m128i *)(t1 + x), _mm_sub_epi16(c, a));
+	}
+	return x;
+}
+
+static int scharr_horizontal_vec(const int16_t *t0, const int16_t *t1, int w, int16_t *d)
+{
+	const __m128i three = _mm_set1_epi16(3), ten = _mm_set1_epi16(10);
+	int x = 0;
+	for (; x + 8 <= w; x += 8) {
+		__m128i dx = _mm_sub_epi16(_mm_loadu_si128((const __m128i *)(t0 + x + 1)),
+					   _mm_loadu_si128((const __m128i *)(t0 + x - 1)));
+		__m128i dy = _mm_add_epi16(
+		    _mm_mullo_epi16(_mm_add_epi16(_mm_loadu_si128((const __m128i *)(t1 + x + 1)),
+						  _mm_loadu_si128((const __m128i *)(t1 + x - 1))),
+				    three),
+		    _mm_mullo_epi16(_mm_loadu_si128((const __m128i *)(t1 + x)), ten));
+		_mm_storeu_si128((__m128i *)(d + 2 * x), _mm_unpacklo_epi16(dx, dy));
+		_mm_storeu_si128((__m128i *)(d + 2 * x + 8), _mm_unpackhi_epi16(dx, dy));
+	}
+	return x;
+}
+
 #if defined(__x86_64__) && defined(__GNUC__)
 /*
  * AVX2 (chosen at run time, mvod_lk_flow): 16 pixels a vector. A row's 16-pixel blocks give 8
@@ -404,7 +475,8 @@ AVX2 static void mismatch_avx2(const struct mvod_lk_level *L, int ix, int iy, co
 	__m256i v0, v1;
 	pair_weights(iw, &w0, &w1);
 	pair_weights16(iw, &v0, &v1);
-	__m128 b1 = _mm_setzero_ps(), b2 = b1;
+	/* b[0]'s lanes, then b[1]'s: each row's two sums folded and converted in one vector */
+	__m256 acc = _mm256_setzero_ps();
 	for (int r = 0; r < win; r++) {
 		const uint8_t *j0 = L->img + (ptrdiff_t)(iy + r) * L->stride + ix,
 			      *j1 = j0 + L->stride;
@@ -422,21 +494,61 @@ AVX2 static void mismatch_avx2(const struct mvod_lk_level *L, int ix, int iy, co
 			    h2,
 			    _mm256_madd_epi16(diff, _mm256_loadu_si256((const __m256i *)(y + c))));
 		}
-		__m128i s1 = fold(h1), s2 = fold(h2);
+		__m256i s12 = _mm256_add_epi32(_mm256_permute2x128_si256(h1, h2, 0x20),
+					       _mm256_permute2x128_si256(h1, h2, 0x31));
 		if (c < pad) {
 			__m128i diff = _mm_sub_epi16(interp8(j0, j1, c, w0, w1),
 						     _mm_loadu_si128((const __m128i *)(t + c)));
-			s1 = _mm_add_epi32(
-			    s1, _mm_madd_epi16(diff, _mm_loadu_si128((const __m128i *)(x + c))));
-			s2 = _mm_add_epi32(
-			    s2, _mm_madd_epi16(diff, _mm_loadu_si128((const __m128i *)(y + c))));
+			__m128i m1 =
+			    _mm_madd_epi16(diff, _mm_loadu_si128((const __m128i *)(x + c)));
+			__m128i m2 =
+			    _mm_madd_epi16(diff, _mm_loadu_si128((const __m128i *)(y + c)));
+			s12 = _mm256_add_epi32(s12, _mm256_set_m128i(m2, m1));
 		}
-		b1 = _mm_add_ps(b1, _mm_cvtepi32_ps(s1));
-		b2 = _mm_add_ps(b2, _mm_cvtepi32_ps(s2));
+		acc = _mm256_add_ps(acc, _mm256_cvtepi32_ps(s12));
 	}
-	_mm_storeu_ps(b[0], b1);
-	_mm_storeu_ps(b[1], b2);
+	_mm_storeu_ps(b[0], _mm256_castps256_ps128(acc));
+	_mm_storeu_ps(b[1], _mm256_extractf128_ps(acc, 1));
 }
+
+AVX2 static int scharr_vertical_avx2(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2, int w,
+				     int16_t *t0, int16_t *t1)
+{
+	const __m256i three = _mm256_set1_epi16(3), ten = _mm256_set1_epi16(10);
+	int x = 0;
+	for (; x + 16 <= w; x += 16) {
+		__m256i a = load16(s0 + x), b = load16(s1 + x), c = load16(s2 + x);
+		_mm256_storeu_si256(
+		    (__m256i *)(t0 + x),
+		    _mm256_add_epi16(_mm256_mullo_epi16(_mm256_add_epi16(a, c), three),
+				     _mm256_mullo_epi16(b, ten)));
+		_mm256_storeu_si256((__m256i *)(t1 + x), _mm256_sub_epi16(c, a));
+	}
+	return x + scharr_vertical_vec(s0 + x, s1 + x, s2 + x, w - x, t0 + x, t1 + x);
+}
+
+AVX2 static int scharr_horizontal_avx2(const int16_t *t0, const int16_t *t1, int w, int16_t *d)
+{
+	const __m256i three = _mm256_set1_epi16(3), ten = _mm256_set1_epi16(10);
+	int x = 0;
+	for (; x + 16 <= w; x += 16) {
+		__m256i dx = _mm256_sub_epi16(_mm256_loadu_si256((const __m256i *)(t0 + x + 1)),
+					      _mm256_loadu_si256((const __m256i *)(t0 + x - 1)));
+		__m256i sum = _mm256_add_epi16(_mm256_loadu_si256((const __m256i *)(t1 + x + 1)),
+					       _mm256_loadu_si256((const __m256i *)(t1 + x - 1)));
+		__m256i dy = _mm256_add_epi16(
+		    _mm256_mullo_epi16(sum, three),
+		    _mm256_mullo_epi16(_mm256_loadu_si256((const __m256i *)(t1 + x)), ten));
+		/* unpack works within halves: pixels 0-3 | 8-11 and 4-7 | 12-15 */
+		__m256i lo = _mm256_unpacklo_epi16(dx, dy), hi = _mm256_unpackhi_epi16(dx, dy);
+		_mm256_storeu_si256((__m256i *)(d + 2 * x),
+				    _mm256_permute2x128_si256(lo, hi, 0x20));
+		_mm256_storeu_si256((__m256i *)(d + 2 * x + 16),
+				    _mm256_permute2x128_si256(lo, hi, 0x31));
+	}
+	return x + scharr_horizontal_vec(t0 + x, t1 + x, w - x, d + 2 * x);
+}
+
 #endif
 
 #elif defined(__ARM_NEON) && defined(__aarch64__)
@@ -548,9 +660,48 @@ static void mismatch_vec(const struct mvod_lk_level *L, int ix, int iy, const in
 	vst1q_f32(b[0], b1);
 	vst1q_f32(b[1], b2);
 }
+
+static int scharr_vertical_vec(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2, int w,
+			       int16_t *t0, int16_t *t1)
+{
+	int x = 0;
+	for (; x + 8 <= w; x += 8) {
+		int16x8_t a = load8(s0 + x), b = load8(s1 + x), c = load8(s2 + x);
+		vst1q_s16(t0 + x, vaddq_s16(vmulq_n_s16(vaddq_s16(a, c), 3), vmulq_n_s16(b, 10)));
+		vst1q_s16(t1 + x, vsubq_s16(c, a));
+	}
+	return x;
+}
+
+static int scharr_horizontal_vec(const int16_t *t0, const int16_t *t1, int w, int16_t *d)
+{
+	int x = 0;
+	for (; x + 8 <= w; x += 8) {
+		int16x8x2_t p;
+		p.val[0] = vsubq_s16(vld1q_s16(t0 + x + 1), vld1q_s16(t0 + x - 1));
+		p.val[1] = vaddq_s16(
+		    vmulq_n_s16(vaddq_s16(vld1q_s16(t1 + x + 1), vld1q_s16(t1 + x - 1)), 3),
+		    vmulq_n_s16(vld1q_s16(t1 + x), 10));
+		vst2q_s16(d + 2 * x, p); /* interleaved: (d/dx, d/dy) pairs */
+	}
+	return x;
+}
+
 #else
 #define prep_vec prep_plain
 #define mismatch_vec mismatch_plain
+static int scharr_vertical_vec(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2, int w,
+			       int16_t *t0, int16_t *t1)
+{
+	(void)s0, (void)s1, (void)s2, (void)w, (void)t0, (void)t1;
+	return 0;
+}
+
+static int scharr_horizontal_vec(const int16_t *t0, const int16_t *t1, int w, int16_t *d)
+{
+	(void)t0, (void)t1, (void)w, (void)d;
+	return 0;
+}
 #endif
 
 /* A path's two kernels. */
@@ -656,4 +807,49 @@ void mvod_lk_flow(const struct mvod_lk_level *I, const struct mvod_lk_level *J,
 {
 	if (mvod_lk_flow_on(MVOD_LK_AVX2, I, J, p, from, to, n, ok))
 		mvod_lk_flow_on(MVOD_LK_VECTOR, I, J, p, from, to, n, ok);
+}
+
+int mvod_lk_scharr_on(enum mvod_lk_path path, const uint8_t *img, ptrdiff_t stride, int w, int h,
+		      int16_t *deriv, ptrdiff_t dstride, int16_t *tmp)
+{
+	int (*vertical)(const uint8_t *, const uint8_t *, const uint8_t *, int, int16_t *,
+			int16_t *) = scharr_vertical_vec;
+	int (*horizontal)(const int16_t *, const int16_t *, int, int16_t *) = scharr_horizontal_vec;
+	if (path == MVOD_LK_AVX2) {
+#ifdef HAVE_AVX2
+		if (!__builtin_cpu_supports("avx2"))
+			return -ENOTSUP;
+		vertical = scharr_vertical_avx2;
+		horizontal = scharr_horizontal_avx2;
+#else
+		return -ENOTSUP;
+#endif
+	}
+	int16_t *t0 = tmp + 1, *t1 = tmp + w + 3;
+	int x0 = w > 1 ? 1 : 0, x1 = w > 1 ? w - 2 : 0;
+	for (int y = 0; y < h; y++) {
+		const uint8_t *s0 = img + (ptrdiff_t)(y > 0 ? y - 1 : h > 1 ? 1 : 0) * stride;
+		const uint8_t *s1 = img + (ptrdiff_t)y * stride;
+		const uint8_t *s2 = img + (ptrdiff_t)(y < h - 1 ? y + 1
+						      : h > 1   ? h - 2
+								: 0) *
+					      stride;
+		int16_t *d = deriv + (ptrdiff_t)y * dstride;
+		int x = path == MVOD_LK_PLAIN ? 0 : vertical(s0, s1, s2, w, t0, t1);
+		scharr_vertical_plain(s0, s1, s2, x, w, t0, t1);
+		t0[-1] = t0[x0];
+		t0[w] = t0[x1];
+		t1[-1] = t1[x0];
+		t1[w] = t1[x1];
+		x = path == MVOD_LK_PLAIN ? 0 : horizontal(t0, t1, w, d);
+		scharr_horizontal_plain(t0, t1, x, w, d);
+	}
+	return 0;
+}
+
+void mvod_lk_scharr(const uint8_t *img, ptrdiff_t stride, int w, int h, int16_t *deriv,
+		    ptrdiff_t dstride, int16_t *tmp)
+{
+	if (mvod_lk_scharr_on(MVOD_LK_AVX2, img, stride, w, h, deriv, dstride, tmp))
+		mvod_lk_scharr_on(MVOD_LK_VECTOR, img, stride, w, h, deriv, dstride, tmp);
 }

@@ -19,6 +19,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Widest window: MVOD_LK_MAX_WIN x MVOD_LK_MAX_WIN pixels. */
 #define MVOD_LK_MAX_WIN 32
 
@@ -60,5 +64,21 @@ enum mvod_lk_path { MVOD_LK_PLAIN, MVOD_LK_VECTOR, MVOD_LK_AVX2 };
 int mvod_lk_flow_on(enum mvod_lk_path path, const struct mvod_lk_level *I,
 		    const struct mvod_lk_level *J, const struct mvod_lk_params *p,
 		    const float *from, float *to, int n, uint8_t *ok);
+
+/*
+ * Scharr derivatives of a w x h grey image (img, stride bytes a row) into deriv (dstride
+ * int16_t a row) as (d/dx, d/dy) pairs, exactly as OpenCV's buildOpticalFlowPyramid computes
+ * them (calcSharrDeriv: rows and columns past the edges reflected about them, 101); tmp holds
+ * 2 * (w + 2) int16_t. Runs the fastest path the machine has.
+ */
+void mvod_lk_scharr(const uint8_t *img, ptrdiff_t stride, int w, int h, int16_t *deriv,
+		    ptrdiff_t dstride, int16_t *tmp);
+/* The same on one path (as mvod_lk_flow_on). */
+int mvod_lk_scharr_on(enum mvod_lk_path path, const uint8_t *img, ptrdiff_t stride, int w, int h,
+		      int16_t *deriv, ptrdiff_t dstride, int16_t *tmp);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

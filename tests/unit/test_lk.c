@@ -3,8 +3,8 @@
  * Scharr derivatives as (d/dx, d/dy) pairs): every vector path this build and machine have
  * (SSE2 and AVX2 on x86-64, NEON on arm64) gives exactly what the plain C gives; a smooth
  * texture moved by a known sub-pixel shift is tracked to it; a flat patch and a window that
- * leaves the image fail. Needs only the C library and cmocka,
- * so make cross-arm64 runs it under qemu too.
+ * leaves the image fail; the Scharr derivatives equal the kernels' on every path. Needs only the C
+ * library and cmocka, so make cross-arm64 runs it under qemu too.
  */
 #include <errno.h>
 #include <math.h>
@@ -257,6 +257,65 @@ static void test_outside_fails(void **state)
 	assert_int_equal(ok[1], 0);
 }
 
+/* Index i of n reflected about the edges (OpenCV's BORDER_REFLECT_101). */
+static int reflect(int i, int n)
+{
+	return n == 1 ? 0 : i < 0 ? -i : i >= n ? 2 * n - 2 - i : i;
+}
+
+/*
+ * Scharr derivatives: every path equals the plain C, and the plain C the 3x3 kernels over the
+ * image reflected at its edges, on random images of many sizes (1 pixel to wider than two
+ * AVX2 vectors, odd and even).
+ */
+static void test_scharr(void **state)
+{
+	(void)state;
+	enum { SW = 45, SH = 7 };
+	static const int sizes[][2] = {{1, 1},  {1, 5},  {2, 2},  {7, 3},  {8, 2},
+				       {16, 4}, {17, 5}, {31, 6}, {33, 7}, {45, 7}};
+	static uint8_t img[SH * SW];
+	static int16_t ref[2 * SH * SW], out[2 * SH * SW], tmp[2 * (SW + 2)];
+	uint64_t seed = 0x853c49e6748fea9bu;
+	for (int k = 0; k < 20; k++) {
+		for (size_t b = 0; b < sizeof(img); b++) {
+			uint8_t v = (uint8_t)next_word(&seed);
+			img[b] = k % 2 ? v : v & 1 ? 255 : 0;
+		}
+		for (size_t z = 0; z < sizeof(sizes) / sizeof(sizes[0]); z++) {
+			int w = sizes[z][0], h = sizes[z][1];
+			for (int y = 0; y < h; y++)
+				for (int x = 0; x < w; x++) {
+					int dx = 0, dy = 0;
+					for (int j = -1; j <= 1; j++) {
+						int wt = j ? 3 : 10;
+						dx += wt * (img[reflect(y + j, h) * SW +
+								reflect(x + 1, w)] -
+							    img[reflect(y + j, h) * SW +
+								reflect(x - 1, w)]);
+						dy += wt * (img[reflect(y + 1, h) * SW +
+								reflect(x + j, w)] -
+							    img[reflect(y - 1, h) * SW +
+								reflect(x + j, w)]);
+					}
+					ref[2 * (y * SW + x)] = (int16_t)dx;
+					ref[2 * (y * SW + x) + 1] = (int16_t)dy;
+				}
+			for (int path = MVOD_LK_PLAIN; path <= MVOD_LK_AVX2; path++) {
+				memset(out, 0x55, sizeof(out));
+				if (mvod_lk_scharr_on((enum mvod_lk_path)path, img, SW, w, h, out,
+						      2 * SW, tmp) == -ENOTSUP)
+					continue;
+				for (int y = 0; y < h; y++)
+					if (memcmp(&out[2 * y * SW], &ref[2 * y * SW],
+						   2 * (size_t)w * sizeof(int16_t)))
+						fail_msg("scharr, path %d, %dx%d, row %d differs",
+							 path, w, h, y);
+			}
+		}
+	}
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -264,6 +323,7 @@ int main(void)
 	    cmocka_unit_test(test_subpixel_shift),
 	    cmocka_unit_test(test_flat_fails),
 	    cmocka_unit_test(test_outside_fails),
+	    cmocka_unit_test(test_scharr),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
