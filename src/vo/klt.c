@@ -123,7 +123,8 @@ static int alloc_arrays(struct mvod_klt *k)
 	k->corners = calloc((size_t)k->fast_cap, sizeof(*k->corners));
 	k->occ = calloc((size_t)k->occ_w * (size_t)k->occ_h, 1);
 	return k->pos && k->vel && k->err && k->score && k->ref && k->fresh && k->cell && k->next &&
-			       k->back && k->ok && k->ok_back && k->sel && k->fast_xy && k->corners && k->occ
+			       k->back && k->ok && k->ok_back && k->sel && k->fast_xy && k->corners &&
+			       k->occ
 		       ? 0
 		       : -ENOMEM;
 }

@@ -50,12 +50,17 @@ static bool fits(const struct mvod_lk_level *L, int x, int y, int wpx, int hpx)
 	       y + hpx <= L->h + L->border;
 }
 
+/* Index i of 0 .. n - 1 reflected about the edges (OpenCV's BORDER_REFLECT_101). */
+static int reflect(int i, int n)
+{
+	return n == 1 ? 0 : i < 0 ? -i : i >= n ? 2 * n - 2 - i : i;
+}
+
 static int descale(int v, int bits)
 {
 	return (v + (1 << (bits - 1))) >> bits;
 }
 
-/* Bilinear weights of W_BITS bits for fractions (a, b), as OpenCV rounds them. */
 /* v rounded to the nearest integer, ties to even (lrintf's default), in one instruction. */
 static int round_int(float v)
 {
@@ -68,6 +73,7 @@ static int round_int(float v)
 #endif
 }
 
+/* Bilinear weights of W_BITS bits for fractions (a, b), as OpenCV rounds them. */
 static void weights(float a, float b, int iw[4])
 {
 	iw[0] = round_int((1.f - a) * (1.f - b) * (1 << W_BITS));
@@ -182,28 +188,45 @@ static __m128i first_lanes(int k)
 	return _mm_loadu_si128((const __m128i *)(ones_zeros + 8 - k));
 }
 
-/* (iw[0], iw[1]) and (iw[2], iw[3]) as int16 pairs; iw[3] may be -1 from the rounding. */
+/* Weights lo and hi as the int16 pair of one int32 lane; a weight may be -1 from the rounding. */
+static int pair(int lo, int hi)
+{
+	return (int)((uint32_t)(lo & 0xffff) | (uint32_t)hi << 16);
+}
+
+/* (iw[0], iw[1]) and (iw[2], iw[3]) as int16 pairs. */
 static void pair_weights(const int iw[4], __m128i *w0, __m128i *w1)
 {
-	*w0 = _mm_set1_epi32((int)((uint32_t)(iw[0] & 0xffff) | (uint32_t)iw[1] << 16));
-	*w1 = _mm_set1_epi32((int)((uint32_t)(iw[2] & 0xffff) | (uint32_t)iw[3] << 16));
+	*w0 = _mm_set1_epi32(pair(iw[0], iw[1]));
+	*w1 = _mm_set1_epi32(pair(iw[2], iw[3]));
+}
+
+/*
+ * Lane j: v00[j] iw[0] + v01[j] iw[1] + v10[j] iw[2] + v11[j] iw[3], descaled by bits (the
+ * weights as pair_weights gives them).
+ */
+static __m128i blend8(__m128i v00, __m128i v01, __m128i v10, __m128i v11, __m128i w0, __m128i w1,
+		      int bits)
+{
+	const __m128i half = _mm_set1_epi32(1 << (bits - 1));
+	__m128i t0 = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(v00, v01), w0),
+				   _mm_madd_epi16(_mm_unpacklo_epi16(v10, v11), w1));
+	__m128i t1 = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(v00, v01), w0),
+				   _mm_madd_epi16(_mm_unpackhi_epi16(v10, v11), w1));
+	return _mm_packs_epi32(_mm_srai_epi32(_mm_add_epi32(t0, half), bits),
+			       _mm_srai_epi32(_mm_add_epi32(t1, half), bits));
+}
+
+static __m128i load8(const uint8_t *p)
+{
+	return _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)p), _mm_setzero_si128());
 }
 
 /* interp() of pixels c .. c + 7 (reads c .. c + 8 of both rows). */
 static __m128i interp8(const uint8_t *j0, const uint8_t *j1, int c, __m128i w0, __m128i w1)
 {
-	const __m128i z = _mm_setzero_si128(), half = _mm_set1_epi32(1 << (W_BITS - FRAC - 1));
-	__m128i v00 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j0 + c)), z);
-	__m128i v01 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j0 + c + 1)), z);
-	__m128i v10 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j1 + c)), z);
-	__m128i v11 = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(j1 + c + 1)), z);
-	__m128i t0 = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(v00, v01), w0),
-				   _mm_madd_epi16(_mm_unpacklo_epi16(v10, v11), w1));
-	__m128i t1 = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(v00, v01), w0),
-				   _mm_madd_epi16(_mm_unpackhi_epi16(v10, v11), w1));
-	t0 = _mm_srai_epi32(_mm_add_epi32(t0, half), W_BITS - FRAC);
-	t1 = _mm_srai_epi32(_mm_add_epi32(t1, half), W_BITS - FRAC);
-	return _mm_packs_epi32(t0, t1);
+	return blend8(load8(j0 + c), load8(j0 + c + 1), load8(j1 + c), load8(j1 + c + 1), w0, w1,
+		      W_BITS - FRAC);
 }
 
 /*
@@ -212,18 +235,10 @@ static __m128i interp8(const uint8_t *j0, const uint8_t *j1, int c, __m128i w0, 
  */
 static __m128i interp_deriv4(const int16_t *d0, const int16_t *d1, int c, __m128i w0, __m128i w1)
 {
-	const __m128i half = _mm_set1_epi32(1 << (W_BITS - 1));
-	__m128i v00 = _mm_loadu_si128((const __m128i *)(d0 + 2 * c));
-	__m128i v01 = _mm_loadu_si128((const __m128i *)(d0 + 2 * c + 2));
-	__m128i v10 = _mm_loadu_si128((const __m128i *)(d1 + 2 * c));
-	__m128i v11 = _mm_loadu_si128((const __m128i *)(d1 + 2 * c + 2));
-	__m128i t0 = _mm_add_epi32(_mm_madd_epi16(_mm_unpacklo_epi16(v00, v01), w0),
-				   _mm_madd_epi16(_mm_unpacklo_epi16(v10, v11), w1));
-	__m128i t1 = _mm_add_epi32(_mm_madd_epi16(_mm_unpackhi_epi16(v00, v01), w0),
-				   _mm_madd_epi16(_mm_unpackhi_epi16(v10, v11), w1));
-	t0 = _mm_srai_epi32(_mm_add_epi32(t0, half), W_BITS);
-	t1 = _mm_srai_epi32(_mm_add_epi32(t1, half), W_BITS);
-	return _mm_packs_epi32(t0, t1);
+	return blend8(_mm_loadu_si128((const __m128i *)(d0 + 2 * c)),
+		      _mm_loadu_si128((const __m128i *)(d0 + 2 * c + 2)),
+		      _mm_loadu_si128((const __m128i *)(d1 + 2 * c)),
+		      _mm_loadu_si128((const __m128i *)(d1 + 2 * c + 2)), w0, w1, W_BITS);
 }
 
 /* The 8 int16 of pairs from p on and from p + 8 on, split: d/dx into *x, d/dy into *y. */
@@ -310,16 +325,15 @@ static void mismatch_vec(const struct mvod_lk_level *L, int ix, int iy, const in
 	_mm_storeu_ps(b[0], b1);
 	_mm_storeu_ps(b[1], b2);
 }
+
 /* The Scharr passes 8 pixels at a time from x on; returns where they stopped. */
 static int scharr_vertical_vec(const uint8_t *s0, const uint8_t *s1, const uint8_t *s2, int w,
 			       int16_t *t0, int16_t *t1)
 {
-	const __m128i z = _mm_setzero_si128(), three = _mm_set1_epi16(3), ten = _mm_set1_epi16(10);
+	const __m128i three = _mm_set1_epi16(3), ten = _mm_set1_epi16(10);
 	int x = 0;
 	for (; x + 8 <= w; x += 8) {
-		__m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s0 + x)), z);
-		__m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s1 + x)), z);
-		__m128i c = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)(s2 + x)), z);
+		__m128i a = load8(s0 + x), b = load8(s1 + x), c = load8(s2 + x);
 		_mm_storeu_si128((__m128i *)(t0 + x),
 				 _mm_add_epi16(_mm_mullo_epi16(_mm_add_epi16(a, c), three),
 					       _mm_mullo_epi16(b, ten)));
@@ -407,8 +421,8 @@ AVX2 static __m256i interp_deriv8(const int16_t *d0, const int16_t *d1, int c, _
 
 AVX2 static void pair_weights16(const int iw[4], __m256i *w0, __m256i *w1)
 {
-	*w0 = _mm256_set1_epi32((int)((uint32_t)(iw[0] & 0xffff) | (uint32_t)iw[1] << 16));
-	*w1 = _mm256_set1_epi32((int)((uint32_t)(iw[2] & 0xffff) | (uint32_t)iw[3] << 16));
+	*w0 = _mm256_set1_epi32(pair(iw[0], iw[1]));
+	*w1 = _mm256_set1_epi32(pair(iw[2], iw[3]));
 }
 
 AVX2 static void prep_avx2(const struct mvod_lk_level *L, int tx, int ty, const int iw[4], int win,
@@ -826,21 +840,17 @@ int mvod_lk_scharr_on(enum mvod_lk_path path, const uint8_t *img, ptrdiff_t stri
 #endif
 	}
 	int16_t *t0 = tmp + 1, *t1 = tmp + w + 3;
-	int x0 = w > 1 ? 1 : 0, x1 = w > 1 ? w - 2 : 0;
 	for (int y = 0; y < h; y++) {
-		const uint8_t *s0 = img + (ptrdiff_t)(y > 0 ? y - 1 : h > 1 ? 1 : 0) * stride;
+		const uint8_t *s0 = img + (ptrdiff_t)reflect(y - 1, h) * stride;
 		const uint8_t *s1 = img + (ptrdiff_t)y * stride;
-		const uint8_t *s2 = img + (ptrdiff_t)(y < h - 1 ? y + 1
-						      : h > 1   ? h - 2
-								: 0) *
-					      stride;
+		const uint8_t *s2 = img + (ptrdiff_t)reflect(y + 1, h) * stride;
 		int16_t *d = deriv + (ptrdiff_t)y * dstride;
 		int x = path == MVOD_LK_PLAIN ? 0 : vertical(s0, s1, s2, w, t0, t1);
 		scharr_vertical_plain(s0, s1, s2, x, w, t0, t1);
-		t0[-1] = t0[x0];
-		t0[w] = t0[x1];
-		t1[-1] = t1[x0];
-		t1[w] = t1[x1];
+		t0[-1] = t0[reflect(-1, w)];
+		t0[w] = t0[reflect(w, w)];
+		t1[-1] = t1[reflect(-1, w)];
+		t1[w] = t1[reflect(w, w)];
 		x = path == MVOD_LK_PLAIN ? 0 : horizontal(t0, t1, w, d);
 		scharr_horizontal_plain(t0, t1, x, w, d);
 	}
