@@ -8,20 +8,27 @@
 #     uptime_s are timings, and periodic status messages come at wall-clock moments.
 #   - mvod bench CSV: every column except fps and the *_ms timing columns.
 #
-# Usage: bench/identical.sh OLD_MVOD NEW_MVOD [MVOD_SYNTH]
-#   e.g. bench/identical.sh /work/main/build/mvod build/mvod
+# Usage: bench/identical.sh OLD_MVOD NEW_MVOD [MVOD_SYNTH [MKSPEEDLOG]]
+#   e.g. bench/identical.sh ../main/build/mvod build/mvod
 # Inputs: the KITTI 06 and 07 clips in ../shared/data (skipped when absent) and short
-# mvod-synth sequences. Outputs go to a temporary folder, removed at the end unless KEEP=1.
-# Prints one line per comparison and exits 1 when any output differs.
+# mvod-synth sequences. On each input: the default run (LCM log, plot), --scale gt, mvod
+# bench, and the matrix of both modes (map, twoview) x both front ends (klt, orb) x every scale
+# mode (auto, gt, height, external: the ground truth's speed through a file:// LCM log made
+# by MKSPEEDLOG, default build/tests/mkspeedlog beside NEW_MVOD; the external rows are skipped
+# without it); then two-view with SIFT and with FLANN on the turn. MATRIX=0 runs only the
+# default rows. Outputs go to a temporary folder, removed at the end unless KEEP=1. Prints one
+# line per comparison and exits 1 when any output differs.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 synth=${3:-$(dirname "$2")/tools/mvod-synth}
+speedlog=${4:-$(dirname "$2")/tests/mkspeedlog}
 data=${MVOD_DATA:-$root/../shared/data}
 work=$(mktemp -d)
 [ "${KEEP:-0}" = 1 ] && echo "outputs in $work" || trap 'rm -rf "$work"' EXIT
 # Copies, so that a rebuild during the run does not swap a binary under it.
 cp "$1" "$work/mvod.old" && cp "$2" "$work/mvod.new" && cp "$synth" "$work/mvod-synth"
 old=$work/mvod.old new=$work/mvod.new synth=$work/mvod-synth
+[ -x "$speedlog" ] && cp "$speedlog" "$work/mkspeedlog" && speedlog=$work/mkspeedlog || speedlog=
 fail=0
 
 # Decodes an LCM log into what must not change (see above), one line per item.
@@ -29,7 +36,7 @@ lcm_digest() {
 	python3 - "$1" <<'EOF'
 import struct, sys, hashlib
 data = open(sys.argv[1], 'rb').read()
-off, changes, last = 0, [], None
+off, changes, last, last2 = 0, [], None, None
 while off < len(data):
 	sync, _, _, clen, dlen = struct.unpack_from('>IqqII', data, off)
 	assert sync == 0xEDA1DA01, 'not an LCM log'
@@ -47,10 +54,16 @@ while off < len(data):
 		if not changes or changes[-1] != key:
 			changes.append(key)
 		last = (f[1], f[2], f[9], f[10], f[11], f[12], f[13], f[-1])
+	elif chan == 'MVOD_STATUS2':
+		# status_t's fields, then map_points, keyframes, scale, scale_confidence, latency_ms:
+		# the last message's map counts and scale (latency is a timing)
+		f = struct.unpack_from('>qqbffffffiiiqqqdiiidff', payload)
+		last2 = (f[1], f[2], f[9], f[10], f[11], f[12], f[13], f[16], f[17], f[18], f[19], f[20])
 	else:
 		print('channel', chan, hashlib.sha256(payload).hexdigest())
 print('status changes (state, faults)', changes)
 print('last status', last)
+print('last status2', last2)
 EOF
 }
 
@@ -111,6 +124,36 @@ run() {
 	fi
 }
 
+# matrix CASE SPEED_URL ARGS...: ARGS (source, calibration, ground truth) in both modes, both
+# front ends and every scale mode, each writing a TUM trajectory; SPEED_URL empty: no external.
+matrix() {
+	local case=$1 speed=$2
+	shift 2
+	[ "${MATRIX:-1}" = 1 ] || return 0
+	for mode in map twoview; do
+		for fe in klt orb; do
+			for scale in auto gt height external; do
+				local extra=(--no-lcm)
+				if [ $scale = external ]; then
+					[ -n "$speed" ] || continue
+					extra=(--no-lcm --speed-url "$speed")
+				fi
+				[ $scale = height ] && extra+=(--camera-height 1.65)
+				run "$case-$mode-$fe-$scale" "$@" --mode $mode --frontend $fe --scale $scale \
+					"${extra[@]}" --trajectory @OUT@.tum
+			done
+		done
+	done
+}
+
+# speed_url NAME GT [--times FILE]: an LCM log of GT's exact speed, its file:// URL printed.
+speed_url() {
+	[ -n "$speedlog" ] || return 0
+	local log=$work/$1.speed.lcmlog
+	shift
+	"$speedlog" "$@" "$log" >/dev/null && echo "file://$log?mode=r"
+}
+
 # Two short street sequences: the turn (rotation and translation) as video, the forward path
 # as PNG images, so both file sources are covered.
 "$synth" --path turn --frames 60 --speed 3 --out "$work/turn" >/dev/null
@@ -125,7 +168,14 @@ for s in turn fwd; do
 		--plot @OUT@.png --no-lcm
 	run "$s-bench" bench "${common[@]}" --gt "$work/$s/gt.tum" --csv @OUT@.csv \
 		--plots @OUT@.plots
+	matrix "$s" "$(speed_url "$s" "$work/$s/gt.tum")" "${common[@]}" --gt "$work/$s/gt.tum"
 done
+if [ "${MATRIX:-1}" = 1 ]; then
+	turn=(--source "file:$work/turn/video.mkv" --calib "$work/turn/calib.json" --gt "$work/turn/gt.tum")
+	run turn-twoview-sift "${turn[@]}" --mode twoview --detector sift --no-lcm --trajectory @OUT@.tum
+	run turn-twoview-flann "${turn[@]}" --mode twoview --frontend orb --matcher flann-ratio \
+		--no-lcm --trajectory @OUT@.tum
+fi
 for seq in 06 07; do
 	dir=$data/kitti-odometry-$seq-clip
 	if [ ! -d "$dir" ]; then
@@ -137,6 +187,8 @@ for seq in 06 07; do
 		--status-rate 0.1 --lcm-url "file://@OUT@.lcmlog?mode=w"
 	run "kitti$seq-gt" "${kitti[@]}" --scale gt --trajectory @OUT@.kitti --no-lcm
 	run "kitti$seq-bench" bench "${kitti[@]}" --scale gt --csv @OUT@.csv --plots @OUT@.plots
+	matrix "kitti$seq" "$(speed_url "kitti$seq" "$dir/poses/$seq.txt" --times \
+		"$dir/sequences/$seq/times.txt")" "${kitti[@]}"
 done
 [ $fail = 0 ] && echo "identical: every output the same" || echo "identical: outputs differ"
 exit $fail
