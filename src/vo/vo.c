@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "ba_shim.h"
-#include "cv_shim.h"
-#include "klt.h"
-#include "mapvo.h"
-#include "match.h"
+#include "vo/optim/ba_shim.h"
+#include "vo/frontend/cv_shim.h"
+#include "vo/frontend/klt.h"
+#include "vo/map/mapvo.h"
+#include "vo/frontend/match.h"
 #include "util/clock.h"
 #include "util/errbuf.h"
 #include "vo_internal.h"

@@ -2,10 +2,10 @@
 #ifndef MVOD_VO_INTERNAL_H
 #define MVOD_VO_INTERNAL_H
 
-#include "match.h"
+#include "vo/frontend/match.h"
 #include "mvod/vo.h"
-#include "scale.h"
-#include "types.h"
+#include "vo/core/scale.h"
+#include "vo/core/types.h"
 
 /*
  * A frame slot: one frame's features and, for the reference frame, the structure seen from it.

@@ -8,7 +8,7 @@
 #define MVOD_VO_SEAM_H
 
 #include "mvod/vo.h"
-#include "types.h"
+#include "vo/core/types.h"
 
 /*
  * Processes one frame's features: f->kp in pixels of the VO's camera (the one given to

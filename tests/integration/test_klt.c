@@ -20,7 +20,7 @@
 #include "harness.h"
 #include "mvod/capture.h"
 #include "mvod/geom.h"
-#include "vo/klt.h"
+#include "vo/frontend/klt.h"
 
 #define W 640
 #define H 480

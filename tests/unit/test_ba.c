@@ -16,9 +16,9 @@
 #include <cmocka.h>
 
 #include "scene.h"
-#include "vo/ba_lm.h"
-#include "vo/ba_shim.h"
-#include "vo/ba_thread.h"
+#include "vo/optim/ba_lm.h"
+#include "vo/optim/ba_shim.h"
+#include "vo/optim/ba_thread.h"
 
 #define POSES 7
 #define MAX_PTS 2000

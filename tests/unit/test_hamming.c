@@ -11,7 +11,7 @@
 
 #include <cmocka.h>
 
-#include "vo/match.h"
+#include "vo/frontend/match.h"
 
 /* xorshift64: the same descriptors on every machine. */
 static uint64_t next_word(uint64_t *s)

@@ -17,7 +17,7 @@
 
 #include <cmocka.h>
 
-#include "vo/lk.h"
+#include "vo/frontend/lk.h"
 
 enum { W = 160, H = 120, BORDER = 32, LEVELS = 2 };
 

@@ -8,7 +8,7 @@
 
 #include <cmocka.h>
 
-#include "vo/map.h"
+#include "vo/map/map.h"
 
 #define KP 16
 

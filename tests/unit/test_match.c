@@ -11,7 +11,7 @@
 
 #include <cmocka.h>
 
-#include "vo/match.h"
+#include "vo/frontend/match.h"
 
 #define CAP 8
 

@@ -12,8 +12,8 @@
 #include <cmocka.h>
 
 #include "mvod/geom.h"
-#include "vo/cv_shim.h"
-#include "vo/motion.h"
+#include "vo/frontend/cv_shim.h"
+#include "vo/geom/motion.h"
 #include "util/linalg.h"
 
 #define N 200

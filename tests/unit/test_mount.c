@@ -18,7 +18,7 @@
 #include "harness.h"
 #include "mvod/calib.h"
 #include "mvod/mount.h"
-#include "vo/scale.h"
+#include "vo/core/scale.h"
 
 static const char *dir;
 

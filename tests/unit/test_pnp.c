@@ -14,7 +14,7 @@
 #include <cmocka.h>
 
 #include "scene.h"
-#include "vo/pnp_shim.h"
+#include "vo/geom/pnp_shim.h"
 
 #define N 300
 

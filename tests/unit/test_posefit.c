@@ -13,7 +13,7 @@
 #include <cmocka.h>
 
 #include "scene.h"
-#include "vo/posefit.h"
+#include "vo/geom/posefit.h"
 
 #define NP 30  /* near map points, as KITTI 07's map tracks late in a map (30-100) */
 #define NE 300 /* far tracks without a point */

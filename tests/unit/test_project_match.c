@@ -10,7 +10,7 @@
 #include <cmocka.h>
 
 #include "scene.h"
-#include "vo/project_match.h"
+#include "vo/map/project_match.h"
 
 #define NKP 400
 #define NPT 100

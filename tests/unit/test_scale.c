@@ -16,8 +16,8 @@
 
 #include "mvod/geom.h"
 #include "mvod/vo.h"
-#include "vo/map.h"
-#include "vo/scale.h"
+#include "vo/map/map.h"
+#include "vo/core/scale.h"
 #include "vo/vo_seam.h"
 
 #define W 640

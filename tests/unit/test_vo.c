@@ -18,7 +18,7 @@
 
 #include "mvod/geom.h"
 #include "mvod/vo.h"
-#include "vo/mapvo.h"
+#include "vo/map/mapvo.h"
 #include "vo/vo_internal.h"
 #include "vo/vo_seam.h"
 

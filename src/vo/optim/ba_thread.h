@@ -15,7 +15,7 @@
 #include <stdbool.h>
 
 #include "ba_shim.h"
-#include "map.h"
+#include "vo/map/map.h"
 
 struct mvod_ba_job {
 	struct mvod_ba_problem p;   /* its arrays are those below */

@@ -5,7 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "match.h"
+#include "vo/frontend/match.h"
 #include "mvod/geom.h"
 
 struct mvod_pm {

@@ -10,8 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "klt.h"
-#include "posefit.h"
+#include "vo/frontend/klt.h"
+#include "vo/geom/posefit.h"
 #include "util/linalg.h"
 
 /*

@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "mvod/vo.h"
-#include "types.h"
+#include "vo/core/types.h"
 
 struct mvod_match_params {
 	enum mvod_matcher_kind kind;

@@ -16,11 +16,11 @@
 
 #include <stdbool.h>
 
-#include "ba_thread.h"
+#include "vo/optim/ba_thread.h"
 #include "map.h"
-#include "pnp_shim.h"
+#include "vo/geom/pnp_shim.h"
 #include "project_match.h"
-#include "vo_internal.h"
+#include "vo/vo_internal.h"
 
 /*
  * --scale height, map mode: after this many height measurements, the rescales of any this many

@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "klt_shim.h"
-#include "scale.h"
+#include "vo/core/scale.h"
 #include "util/kernels.h"
 
 /*

@@ -9,7 +9,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "motion.h"
+#include "vo/geom/motion.h"
 #include "util/linalg.h"
 
 /* See mapvo.c: a two-view step builds the map from at least this many well-placed points. */

@@ -3,15 +3,15 @@
  * their matches (a rotation-only model first, then the essential matrix, its decomposition by
  * cheirality, and the step length), applied to the pose chain. A map mode will sit beside it.
  */
-#include "vo_internal.h"
+#include "vo/vo_internal.h"
 
 #include <errno.h>
 #include <math.h>
 #include <string.h>
 
-#include "cv_shim.h"
-#include "mapvo.h"
-#include "motion.h"
+#include "vo/frontend/cv_shim.h"
+#include "vo/map/mapvo.h"
+#include "vo/geom/motion.h"
 #include "util/linalg.h"
 
 /*

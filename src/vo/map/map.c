@@ -1,6 +1,6 @@
 #include "map.h"
 
-#include "match.h"
+#include "vo/frontend/match.h"
 
 #include <errno.h>
 #include <math.h>

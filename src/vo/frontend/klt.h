@@ -9,7 +9,7 @@
 #define MVOD_KLT_H
 
 #include "mvod/image.h"
-#include "types.h"
+#include "vo/core/types.h"
 
 struct mvod_klt_params {
 	int max_tracks;  /* tracks kept at most; corners are detected when fewer than 3/4 remain */

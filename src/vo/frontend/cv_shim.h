@@ -11,7 +11,7 @@
 #include "mvod/calib.h"
 #include "mvod/image.h"
 #include "mvod/vo.h"
-#include "types.h"
+#include "vo/core/types.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -13,7 +13,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "motion.h"
+#include "vo/geom/motion.h"
 #include "mvod/geom.h"
 
 /*
