@@ -17,9 +17,10 @@ DEBS_RUN := gcc g++ make pkg-config meson ninja-build \
 	libopencv-dev libopencv-contrib-dev liblcm-dev liblcm-bin libglib2.0-dev libcjson-dev \
 	libyaml-dev libxml2-dev libjpeg62-turbo-dev libavformat-dev libavcodec-dev libavutil-dev \
 	libswscale-dev zlib1g-dev \
-	libinih-dev libsystemd-dev libceres-dev libdeflate-dev
-# cmocka: the test suites; clang and its runtime: libFuzzer; valgrind: the memcheck test.
-DEBS_TEST := libcmocka-dev clang libclang-rt-14-dev valgrind
+	libinih-dev libsystemd-dev libdeflate-dev
+# cmocka: the test suites; clang and its runtime: libFuzzer; valgrind: the memcheck test;
+# Ceres (with Eigen, glog, SuiteSparse): the reference unit/ba compares bundle adjustment with.
+DEBS_TEST := libcmocka-dev clang libclang-rt-14-dev valgrind libceres-dev
 DEBS_LIBCAMERA := libcamera-dev
 DEBS := $(DEBS_RUN) $(if $(LIBCAMERA),$(DEBS_LIBCAMERA))
 

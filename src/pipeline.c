@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "mvod/capture.h"
+#include "mvod/config.h"
 #include "mvod/log.h"
 #include "util/body_frame.h"
 #include "mvod/speed.h"
@@ -262,7 +263,9 @@ static int open_inputs(struct run *r)
 	ret = open_scale(r);
 	if (ret)
 		return ret;
-	ret = mvod_vo_check_size(&o->vo, &r->cam, err, sizeof(err));
+	ret = mvod_config_check_frontend(&o->vo, err, sizeof(err));
+	if (!ret)
+		ret = mvod_config_check_frames(&o->vo, &r->cam, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s: %s", o->source, err);
 		return ret;
@@ -270,10 +273,6 @@ static int open_inputs(struct run *r)
 	r->sum->frontend = mvod_vo_frontend(&o->vo);
 	LOG(INFO, "front end: %s%s", mvod_frontend_names[r->sum->frontend],
 	    o->vo.frontend == MVOD_FRONTEND_AUTO ? " (--frontend auto)" : "");
-	/* Info, as the front end's choice: documented behaviour, not a fault (-q hides it). */
-	const char *no_map = mvod_vo_map_missing(&o->vo);
-	if (no_map)
-		LOG(INFO, "%s: running --mode twoview", no_map);
 	/*
 	 * A file or dataset is read as fast as it is processed, so waiting for bundle adjustment
 	 * costs no frame, and its result is then the same on every machine; on a live camera the
@@ -581,7 +580,7 @@ static void feed_speed(struct run *r, const struct mvod_frame *f)
 	bool stale = mvod_speed_odometer(r->speed, f->utime, &odo) != 0;
 	mvod_vo_set_odometer(r->vo, stale ? NAN : odo);
 	log_refused_speed(r);
-	bool map = mvod_vo_run_mode(&r->o->vo) == MVOD_VO_MAP;
+	bool map = r->o->vo.mode == MVOD_VO_MAP;
 	if (stale && !r->speed_stale)
 		LOG(WARN, "frame %lld (t = %.6f s): no mvod.speed_t on %s within %.1f s: %s until "
 			  "speed arrives", (long long)f->index, f->utime / 1e6, r->o->speed_channel,

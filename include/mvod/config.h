@@ -107,6 +107,20 @@ void mvod_config_apply_log(const struct mvod_config *c);
  */
 int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t errlen);
 
+/*
+ * Whether the VO's options fit the mode and front end, each clash -EINVAL naming the options in
+ * err (an option would otherwise be silently ignored): --frontend klt with a descriptor
+ * option, --tracks where the descriptor front end runs, --mode map with a detector other
+ * than ORB (its map keeps ORB descriptors).
+ */
+int mvod_config_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen);
+/*
+ * Whether frames of cam's size, scaled by params->resize, are large enough for the VO:
+ * -EINVAL with the reason in err when not.
+ */
+int mvod_config_check_frames(const struct mvod_vo_params *params, const struct mvod_camera *cam,
+			     char *err, size_t errlen);
+
 #ifdef __cplusplus
 }
 #endif

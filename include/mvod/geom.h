@@ -31,6 +31,12 @@ void mvod_mat3_tvec(const double A[9], const double v[3], double out[3]); /* A^T
 /* out = R X + t: a point moved by a rigid motion (out may be X) */
 void mvod_rigid_apply(const double R[9], const double t[3], const double X[3], double out[3]);
 /*
+ * A camera-from-world pose R, t whose world is scaled by s about centre (world frame): the
+ * camera's centre c goes to centre + s (c - centre), its rotation stays; t becomes
+ * s t + (s - 1) R centre.
+ */
+void mvod_rigid_scale(const double R[9], double t[3], const double centre[3], double s);
+/*
  * Pixel uv of point c in a pinhole camera's frame, K = fx, fy, cx, cy (no distortion: mvod's
  * frames are undistorted); false when c is not in front of the camera (z <= 0 or NaN).
  */
@@ -42,6 +48,11 @@ bool mvod_pinhole_pixel(const double K[4], const double c[3], double uv[2]);
 void mvod_motion_between(const double Ra[9], const double ta[3], const double Rb[9],
 			 const double tb[3], double R[9], double t[3]);
 double mvod_vec3_norm(const double v[3]);
+/* a . b, summed in the order x, y, z. */
+static inline double mvod_vec3_dot(const double a[3], const double b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 /* out = a x b (out must not alias a or b) */
 void mvod_vec3_cross(const double a[3], const double b[3], double out[3]);
 /*

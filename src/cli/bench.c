@@ -241,7 +241,7 @@ static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
 	row_params(base, c, &p);
 	p.frontend = fe;
 	char err[256];
-	if (!mvod_vo_check_frontend(&p, err, sizeof(err)))
+	if (!mvod_config_check_frontend(&p, err, sizeof(err)))
 		return 0;
 	fprintf(stderr, "%s: --sweep: %s; see %s --help\n", cli_prog, err, cli_prog);
 	return -EINVAL;
@@ -549,7 +549,7 @@ static void config_cells(const struct mvod_vo_params *p, struct row *r)
 	cell(r, C_RESIZE, "%g", p->resize);
 	cell(r, C_BLUR, "%.0f", p->blur_ksize);
 	cell(r, C_RATIO, "%g", mvod_matcher_uses_ratio(p->matcher) ? p->ratio : NAN);
-	snprintf(r->f[C_MODE], sizeof(r->f[0]), "%s", mvod_vo_mode_names[mvod_vo_run_mode(p)]);
+	snprintf(r->f[C_MODE], sizeof(r->f[0]), "%s", mvod_vo_mode_names[p->mode]);
 	if (mvod_vo_frontend(p) == MVOD_FRONTEND_KLT) { /* no descriptors, no matcher: the track cap */
 		strcpy(r->f[C_DETECTOR], "klt");
 		strcpy(r->f[C_MATCHER], "-");

@@ -146,8 +146,7 @@ void cli_usage_vo(FILE *out)
 "  --mode map|twoview    map (default): a local map of keyframes and points that carries\n"
 "                        one scale, PnP per frame and windowed bundle adjustment; twoview:\n"
 "                        frame to frame, each step scaled by the structure it shares with\n"
-"                        the last (kept for comparison; --detector sift needs it). Map runs\n"
-"                        as twoview, and says so, in a build without Ceres\n"
+"                        the last (kept for comparison; --detector sift needs it)\n"
 "  --ba-sync             map mode, live camera: wait for each bundle adjustment (on its own\n"
 "                        thread) at the frame after its keyframe, as files and datasets\n"
 "                        always do: results independent of the machine's speed\n"
@@ -206,7 +205,7 @@ void cli_usage_general(FILE *out)
 int cli_check_frontend(const struct mvod_config *cfg)
 {
 	char err[256];
-	if (!mvod_vo_check_frontend(&cfg->run.vo, err, sizeof(err)))
+	if (!mvod_config_check_frontend(&cfg->run.vo, err, sizeof(err)))
 		return 0;
 	fprintf(stderr, "%s: %s; see %s --help\n", cli_prog, err, cli_prog);
 	return -EINVAL;

@@ -53,6 +53,13 @@ void mvod_rigid_apply(const double R[9], const double t[3], const double X[3], d
 		out[k] += t[k];
 }
 
+void mvod_rigid_scale(const double R[9], double t[3], const double centre[3], double s)
+{
+	for (int r = 0; r < 3; r++)
+		t[r] = s * t[r] + (s - 1) * (R[3 * r] * centre[0] + R[3 * r + 1] * centre[1] +
+					     R[3 * r + 2] * centre[2]);
+}
+
 bool mvod_pinhole_pixel(const double K[4], const double c[3], double uv[2])
 {
 	if (!(c[2] > 0))

@@ -7,6 +7,8 @@
 #ifndef MVOD_VO_SEAM_H
 #define MVOD_VO_SEAM_H
 
+#include <stdbool.h>
+
 #include "mvod/vo.h"
 #include "vo/core/types.h"
 
@@ -21,5 +23,13 @@
  */
 int mvod_vo_process_features(struct mvod_vo *vo, const struct mvod_features *f,
 			     const double *gt_position, struct mvod_vo_result *res);
+
+/*
+ * The VO's own pose (camera-to-world), which mvod_vo_result's hides while --scale height or
+ * external has no measurement yet: for tests of what the chain does before it is published.
+ */
+const struct mvod_pose *mvod_vo_seam_pose(const struct mvod_vo *vo);
+/* Whether the VO runs map mode (has a map, or is waiting for one). */
+bool mvod_vo_seam_has_map(const struct mvod_vo *vo);
 
 #endif

@@ -43,19 +43,6 @@ const char *harness_bin(const char *env)
 	return p;
 }
 
-bool harness_have_ceres(void)
-{
-	return strcmp(harness_bin("MVOD_HAVE_CERES"), "1") == 0;
-}
-
-void harness_need_map(void)
-{
-	if (!harness_have_ceres()) {
-		print_message("built without Ceres: map mode runs as two-view, nothing to test here\n");
-		skip();
-	}
-}
-
 const char *harness_tmpdir(void)
 {
 	if (!tmpdir[0]) {

@@ -27,10 +27,6 @@ struct run_result {
 int harness_run(char *const argv[], struct run_result *r);
 /* Path of a binary from the environment (MVOD, MVOD_SYNTH), failing the test if unset. */
 const char *harness_bin(const char *env);
-/* Whether mvod was built with Ceres, without which map mode runs as two-view. */
-bool harness_have_ceres(void);
-/* Skips the calling test (cmocka) when mvod was built without Ceres: a test of map mode. */
-void harness_need_map(void);
 /* mvod_source_open(uri) fails with code, no source, and an err holding needle. */
 void harness_source_open_fails(const char *uri, int code, const char *needle);
 /* Writes text to path, failing the test if it cannot. */

@@ -17,10 +17,9 @@
  * unwinder found below it: a guide to which stage asks, not part of the assertion (FFmpeg's
  * frame threads and code without unwind tables can put a call under the wrong one).
  *
- * Map mode's bundle adjustment runs on its own thread, named "mvod-ba" (src/vo/ba_thread.c):
- * everything that thread allocates (Ceres's problem, its cost functions made by ba_shim.cpp,
- * the solver's workspace) is charged to it as a whole, printed and not asserted, as OpenCV's
- * allocations are; the assertion counts the frame thread's (and any other thread's) own.
+ * Map mode's bundle adjustment runs on its own thread, named "mvod-ba"
+ * (src/vo/optim/ba_thread.c): everything that thread allocates is charged to it as a whole, and
+ * asserted to be nothing per frame too (its solver, ba_lm.c, works on buffers made at create).
  */
 #include <dlfcn.h>
 #include <link.h>
@@ -304,7 +303,7 @@ static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe, enum mvod_v
 	run(SHORT, true, fe, mode, scale, &a);
 	run(LONG, true, fe, mode, scale, &b);
 	const double frames = LONG - SHORT;
-	long own = -1, total_calls = 0, total_bytes = 0;
+	long own = -1, ba = 0, total_calls = 0, total_bytes = 0;
 	printf("allocations per frame in steady state, by the object that asked, and through which "
 	       "mvod function:\n");
 	for (int i = 0; i < n_owners; i++) {
@@ -312,6 +311,8 @@ static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe, enum mvod_v
 		bool mine = owners[i].base == exe_base;
 		if (mine)
 			own = dc;
+		if (owners[i].base == &ba_thread_owner)
+			ba = dc;
 		total_calls += dc;
 		total_bytes += db;
 		const char *slash = strrchr(owners[i].name, '/');
@@ -324,6 +325,7 @@ static void loop_allocates_nothing_of_its_own(enum mvod_frontend fe, enum mvod_v
 	       total_bytes / frames);
 	/* mvod allocates at setup, so it has an entry; its per-frame difference must be none. */
 	assert_int_equal(own, 0);
+	assert_int_equal(ba, 0);
 }
 
 static void test_loop_allocates_nothing_of_its_own(void **state)
@@ -335,7 +337,7 @@ static void test_loop_allocates_nothing_of_its_own(void **state)
 
 /*
  * Map mode: tracking, keyframes, triangulation and the window's snapshot on the frame thread
- * use buffers made at create; Ceres's allocations happen on the BA thread (see the top).
+ * use buffers made at create, as bundle adjustment on its thread does (see the top).
  */
 static void test_map_loop_allocates_nothing_of_its_own(void **state)
 {

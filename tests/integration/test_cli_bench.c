@@ -210,8 +210,7 @@ static void test_sweep_frontend_axis(void **state)
 	int f = column(header, "features"), mode = column(header, "mode");
 	int klt200 = 0, klt300 = 0, bf = 0, cross = 0;
 	for (int i = 0; i < 4; i++) {
-		/* The default; a build without Ceres runs two-view, and the column says so. */
-		assert_string_equal(cells[i][mode], harness_have_ceres() ? "map" : "twoview");
+		assert_string_equal(cells[i][mode], "map"); /* the default */
 		bool klt = strcmp(cells[i][d], "klt") == 0;
 		if (klt)
 			assert_string_equal(cells[i][m], "-");

@@ -155,8 +155,7 @@ static void test_height_pitched(void **state)
 	snprintf(calib, sizeof(calib), "%s/calib.json", pdir);
 	snprintf(gt, sizeof(gt), "%s/gt.tum", pdir);
 	height_run("pitched", "--mode", "twoview");
-	if (harness_have_ceres()) /* else map mode runs as two-view: the line above */
-		height_run("pitchedmap", "--mode", "map");
+	height_run("pitchedmap", "--mode", "map");
 	strcpy(video, street[0]), strcpy(calib, street[1]), strcpy(gt, street[2]);
 }
 
@@ -169,7 +168,6 @@ static void test_height_pitched(void **state)
 static void test_height_map(void **state)
 {
 	(void)state;
-	harness_need_map();
 	height_run("heightmap", "--mode", "map");
 	/*
 	 * With a given scale, KLT's keyframes also wait for a baseline of a tenth of the tracked
@@ -201,7 +199,6 @@ static void test_height_map(void **state)
 static void test_height_map_fast(void **state)
 {
 	(void)state;
-	harness_need_map();
 	char fdir[240], street[3][300];
 	snprintf(fdir, sizeof(fdir), "%s/fast-street", harness_tmpdir());
 	harness_synth(fdir, "forward", FRAMES, "mkv", "--speed", "14.5", "--size", "640x192", "--fx",
@@ -272,8 +269,6 @@ static void test_external(void **state)
 	struct traj_errors e;
 	run_mvod(&r, "external", "--scale", "external", "--speed-url", url, NULL, NULL);
 	metric_errors(&r, "external", &e);
-	/* Map mode runs (without Ceres two-view does, and says so). */
-	assert_true(harness_have_ceres() == !strstr(r.err, "running --mode twoview"));
 	assert_true(e.ate_m < 0.01 * e.length_m);
 	assert_true(count_source("external", MVOD_POSE_T_SCALE_EXTERNAL) > FRAMES * 3 / 4);
 }
@@ -329,9 +324,7 @@ static void test_external_speed_stops(void **state)
 {
 	(void)state;
 	speed_stops("stops", "twoview", MVOD_POSE_T_SCALE_STRUCTURE, "scale from structure", 0.11);
-	if (harness_have_ceres())
-		speed_stops("stopsmap", NULL, MVOD_POSE_T_SCALE_MAP, "the map keeps its last scale",
-			    0.02);
+	speed_stops("stopsmap", NULL, MVOD_POSE_T_SCALE_MAP, "the map keeps its last scale", 0.02);
 }
 
 /*
@@ -345,7 +338,6 @@ static void test_external_speed_stops(void **state)
 static void test_external_speed_late(void **state)
 {
 	(void)state;
-	harness_need_map();
 	char log[300], url[320], path[320], err[256];
 	snprintf(log, sizeof(log), "%s/speedlate.lcmlog", dir);
 	snprintf(url, sizeof(url), "file://%s?mode=r", log);
@@ -383,7 +375,6 @@ static void test_external_speed_late(void **state)
 static void test_external_stop_go(void **state)
 {
 	(void)state;
-	harness_need_map();
 	char sdir[240], log[300], url[320], street[3][300];
 	strcpy(street[0], video), strcpy(street[1], calib), strcpy(street[2], gt);
 	snprintf(sdir, sizeof(sdir), "%s/stop-go", harness_tmpdir());

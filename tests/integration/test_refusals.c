@@ -124,12 +124,10 @@ static void test_option_clashes(void **state)
 	       "run", "--frontend", "orb", "--tracks", "300", NULL);
 	expect(calib, 2, "--tracks is an option of the KLT front end and --features one of the "
 	       "descriptor front end", "--tracks", "300", "--features", "3000", NULL);
-	if (harness_have_ceres()) { /* else map mode runs as two-view, which takes SIFT */
-		expect(calib, 2, "--mode map keeps ORB descriptors in its map, not sift", "--mode",
-		       "map", "--detector", "sift", NULL);
-		/* Map mode is the default: SIFT asks for two-view by name. */
-		expect(calib, 2, "use --detector orb or --mode twoview", "--detector", "sift", NULL);
-	}
+	expect(calib, 2, "--mode map keeps ORB descriptors in its map, not sift", "--mode", "map",
+	       "--detector", "sift", NULL);
+	/* Map mode is the default: SIFT asks for two-view by name. */
+	expect(calib, 2, "use --detector orb or --mode twoview", "--detector", "sift", NULL);
 	expect(calib, 0, "mvod: 4 frames", "--mode", "twoview", "--detector", "sift", NULL);
 	expect(calib, 2, "--matcher is an option of the descriptor front end", "--frontend", "klt",
 	       "--matcher", "flann", NULL);

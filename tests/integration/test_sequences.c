@@ -34,8 +34,6 @@ struct run {
 static void run_with(const char *dir, const char *source, const char *mode, const char *frontend,
 		     struct run *r)
 {
-	if (strcmp(mode, "map") == 0)
-		harness_need_map();
 	char calib[300], traj[300], log[300], url[320];
 	snprintf(calib, sizeof(calib), "%s/calib.json", dir);
 	snprintf(traj, sizeof(traj), "%s/est.tum", dir);

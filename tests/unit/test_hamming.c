@@ -11,6 +11,7 @@
 
 #include <cmocka.h>
 
+#include "vo/core/hamming.h"
 #include "vo/frontend/match.h"
 
 /* xorshift64: the same descriptors on every machine. */

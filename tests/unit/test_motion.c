@@ -12,7 +12,7 @@
 #include <cmocka.h>
 
 #include "mvod/geom.h"
-#include "vo/frontend/cv_shim.h"
+#include "vo/geom/essential_shim.h"
 #include "vo/geom/motion.h"
 #include "util/linalg.h"
 
@@ -63,7 +63,7 @@ static void test_decompose_and_cheirality(void **state)
 	double tx[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0}, E[9];
 	mvod_mat3_mul(tx, R, E);
 	double R1[9], R2[9], tu[3], Rb[9], tb[3], depth[N];
-	assert_int_equal(mvod_cv_decompose_essential(E, R1, R2, tu), 0);
+	assert_int_equal(mvod_essential_decompose(E, R1, R2, tu), 0);
 	uint8_t mask[N];
 	memset(mask, 1, sizeof(mask));
 	int runner_up = -1;
@@ -99,11 +99,11 @@ static void robust_with_outliers(bool magsac)
 	uint8_t mask[N];
 	int inl = 0;
 	/* Normalised coordinates, 1 px at f = 500. */
-	assert_int_equal(mvod_cv_find_essential(x1, x2, N, magsac, 1.0 / 500, 0.999, E, mask, &inl), 0);
+	assert_int_equal(mvod_essential_find(x1, x2, N, magsac, 1.0 / 500, 0.999, E, mask, &inl), 0);
 	assert_int_equal(inl, N - N / 5);
 	for (int i = 0; i < N; i += 5)
 		assert_int_equal(mask[i], 0);
-	assert_int_equal(mvod_cv_decompose_essential(E, R1, R2, tu), 0);
+	assert_int_equal(mvod_essential_decompose(E, R1, R2, tu), 0);
 	int front = mvod_motion_cheirality(R1, R2, tu, x1, x2, mask, N, Rb, tb, NULL, NULL);
 	assert_int_equal(front, inl);
 	double dR[9];

@@ -18,7 +18,7 @@
 #include "harness.h"
 #include "mvod/calib.h"
 #include "mvod/mount.h"
-#include "vo/core/scale.h"
+#include "vo/core/camera.h"
 
 static const char *dir;
 

@@ -18,7 +18,7 @@
 #include "mvod/calib.h"
 #include "mvod/geom.h"
 #include "mvod/mount.h"
-#include "vo/core/scale.h"
+#include "vo/core/camera.h"
 
 /* Closed-form round trips in doubles: rounding is ~1e-15; 1e-9 is still far below any bug. */
 #define EXACT 1e-9

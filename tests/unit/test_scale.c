@@ -17,7 +17,9 @@
 #include "mvod/geom.h"
 #include "mvod/vo.h"
 #include "vo/map/map.h"
+#include "vo/core/camera.h"
 #include "vo/core/scale.h"
+#include "vo/geom/ground.h"
 #include "vo/vo_seam.h"
 
 #define W 640
@@ -110,19 +112,19 @@ static void test_height_tilted_fit(void **state)
 	plane_scene(3 * M_PI / 180, X);
 	struct mvod_scale_filter f;
 	mvod_scale_filter_init(&f, 0.5, 0.22);
-	assert_true(fabs(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
+	assert_true(fabs(mvod_ground_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
 	mvod_scale_filter_init(&f, 0.5, 0.22);
 	bool used;
 	mvod_scale_filter_step(&f, 1.0, 1.0, &used);
 	assert_true(used && mvod_scale_filter_metric(&f));
 	for (int i = 0; i < MVOD_GROUND_TILTED_RUN; i++) {
-		double r = mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q);
+		double r = mvod_ground_height_ratio(&f, X, 300, 1.6, scratch, &q);
 		assert_true(r > 0.1 * 1.03 && r < 0.1 * 1.08);
 		assert_memory_equal(f.ground_n, level, sizeof(level));
 	}
-	assert_true(fabs(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
+	assert_true(fabs(mvod_ground_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
 	assert_int_equal(f.tilted, MVOD_GROUND_TILTED_RUN + 1);
-	assert_true(fabs(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
+	assert_true(fabs(mvod_ground_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
 	assert_int_equal(f.tilted, 0);
 }
 
@@ -145,7 +147,7 @@ static void test_height_levelled_by_motion(void **state)
 	mvod_scale_filter_motion(&f, nan3);
 	assert_int_equal(f.motion_n, 0);
 	/* Without a direction the fit's own normal is learnt (the first fit sets it whole). */
-	assert_true(fabs(mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
+	assert_true(fabs(mvod_ground_height_ratio(&f, X, 300, 1.6, scratch, &q) - 0.1) < 1e-9);
 	assert_true(fabs(asin(f.ground_n[2]) - 3 * M_PI / 180) < 1e-9);
 	mvod_scale_filter_init(&f, 0.5, 0.22);
 	/* Any length: 3 m along the ground at 2 deg up in the camera's frame (y down). */
@@ -153,7 +155,7 @@ static void test_height_levelled_by_motion(void **state)
 	mvod_scale_filter_motion(&f, dir);
 	assert_int_equal(f.motion_n, 1);
 	for (int i = 0; i < 5; i++) {
-		double r = mvod_scale_height_ratio(&f, X, 300, 1.6, scratch, &q);
+		double r = mvod_ground_height_ratio(&f, X, 300, 1.6, scratch, &q);
 		/* Perpendicular to the travel, to rounding: pitched 2 deg, whatever the fits say. */
 		assert_true(fabs(asin(f.ground_n[2]) - p2) < 1e-9);
 		assert_true(fabs(f.ground_n[0]) < 1e-12);

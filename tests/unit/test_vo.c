@@ -16,10 +16,10 @@
 
 #include <cmocka.h>
 
+#include "mvod/config.h"
 #include "mvod/geom.h"
 #include "mvod/vo.h"
-#include "vo/map/mapvo.h"
-#include "vo/vo_internal.h"
+#include "vo/map/internal.h"
 #include "vo/vo_seam.h"
 
 #define POINTS 400
@@ -110,8 +110,6 @@ static struct mvod_pose at(double x, double y, double z, double yaw_deg)
  */
 static struct mvod_vo *make_vo_in(enum mvod_vo_mode mode, enum mvod_scale_mode scale)
 {
-	if (mode == MVOD_VO_MAP && !mvod_vo_map_available())
-		skip(); /* built without Ceres: map mode runs as two-view (test_run_mode) */
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
 	p.mode = mode;
@@ -520,10 +518,10 @@ static void test_frontend_auto(void **state)
 		assert_string_equal(mvod_vo_descriptor_option(&p), mvod_vo_descriptor_flags[i]);
 		assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
 		char err[256] = "";
-		assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+		assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 		p.frontend = MVOD_FRONTEND_KLT;
 		assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
-		assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+		assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
 		char flag[32];
 		snprintf(flag, sizeof(flag), "--%s", mvod_vo_descriptor_flags[i]);
 		assert_non_null(strstr(err, flag));
@@ -533,45 +531,35 @@ static void test_frontend_auto(void **state)
 	p.frontend = MVOD_FRONTEND_ORB;
 	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
 	char err[256] = "";
-	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 	p.max_tracks = 300; /* the KLT front end's cap, where orb runs: refused */
-	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
 	assert_non_null(strstr(err, "--tracks"));
 	p.frontend = MVOD_FRONTEND_AUTO; /* auto picks klt then */
-	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 	p.max_features = 3000; /* and now orb: the two options pick different front ends */
-	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
 	assert_non_null(strstr(err, "--features"));
 	p = d;
 	p.mode = MVOD_VO_MAP;
 	p.detector = MVOD_DETECTOR_SIFT; /* the map keeps ORB descriptors */
-	if (!mvod_vo_map_available()) { /* without Ceres map runs as two-view, which takes SIFT */
-		assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), 0);
-		return;
-	}
-	assert_int_equal(mvod_vo_check_frontend(&p, err, sizeof(err)), -EINVAL);
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
 	assert_non_null(strstr(err, "--mode map"));
 }
 
-/*
- * The mode that runs: the one asked for, except map mode in a build without Ceres, which runs
- * as two-view (so such a build runs the default); the VO created reports no map then.
- */
+/* The mode that runs is the one asked for: map by default, in every build (no Ceres needed). */
 static void test_run_mode(void **state)
 {
 	(void)state;
 	struct mvod_vo_params p;
 	mvod_vo_params_default(&p);
-	bool map = mvod_vo_map_available();
-	assert_int_equal(mvod_vo_run_mode(&p), map ? MVOD_VO_MAP : MVOD_VO_TWOVIEW);
 	struct mvod_vo *vo = NULL;
 	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
-	assert_int_equal(vo->mapvo != NULL, map);
+	assert_true(mvod_vo_seam_has_map(vo));
 	mvod_vo_destroy(vo);
 	p.mode = MVOD_VO_TWOVIEW;
-	assert_int_equal(mvod_vo_run_mode(&p), MVOD_VO_TWOVIEW);
 	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
-	assert_null(vo->mapvo);
+	assert_false(mvod_vo_seam_has_map(vo));
 	mvod_vo_destroy(vo);
 }
 
@@ -802,10 +790,10 @@ static void rebuild(enum mvod_scale_mode scale, double want_ratio, double tol)
 	}
 	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
 	double t18[3], t19[3];
-	memcpy(t18, vo->pose.t, sizeof(t18));
+	memcpy(t18, mvod_vo_seam_pose(vo)->t, sizeof(t18));
 	r = feed_relooked(vo, 19);
 	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
-	memcpy(t19, vo->pose.t, sizeof(t19));
+	memcpy(t19, mvod_vo_seam_pose(vo)->t, sizeof(t19));
 	r = feed_relooked(vo, 20);
 	assert_frame(&r, MVOD_FRAME_ROTATION, MVOD_STATE_LOST);
 	print_message("map lost at frame 20: %d inliers\n", r.map_lost_inliers);
@@ -817,14 +805,14 @@ static void rebuild(enum mvod_scale_mode scale, double want_ratio, double tol)
 	 */
 	double d20[3], d19[3];
 	for (int k = 0; k < 3; k++)
-		d20[k] = vo->pose.t[k] - t19[k], d19[k] = t19[k] - t18[k];
+		d20[k] = mvod_vo_seam_pose(vo)->t[k] - t19[k], d19[k] = t19[k] - t18[k];
 	assert_true(mvod_vec3_angle(d20, d19) < 1e-4);
 	if (scale == MVOD_SCALE_MODE_HEIGHT)
 		assert_true(fabs(mvod_vec3_norm(d20) / mvod_vec3_norm(d19) - 1) < 1e-12);
 	r = feed_relooked(vo, 21);
 	assert_frame(&r, MVOD_FRAME_MOTION, MVOD_STATE_TRACKING);
 	assert_true(r.keyframe && r.map_points >= 100);
-	double ratio = mvod_vec3_dist(vo->pose.t, t19) / mvod_vec3_dist(t19, t18);
+	double ratio = mvod_vec3_dist(mvod_vo_seam_pose(vo)->t, t19) / mvod_vec3_dist(t19, t18);
 	print_message("rebuilt map's step / the last step: %.9f (want %g)\n", ratio, want_ratio);
 	assert_true(fabs(ratio - want_ratio) < tol * want_ratio);
 	if (scale == MVOD_SCALE_MODE_AUTO)
@@ -893,7 +881,7 @@ static void test_map_waits_for_parallax(void **state)
 /*
  * Bundle adjustment's gauge (mapping_ba.c): a monocular window must hold the oldest keyframe
  * (position and orientation) and something fixing the unit: the oldest n_held (2 with
- * descriptors, 3 with KLT, whose keyframes are a frame apart: mapvo.c), but never the newest,
+ * descriptors, 3 with KLT, whose keyframes are a frame apart: map/mapmode.c), but never the newest,
  * which is what the window is there to refine. In a map's first window (two keyframes) with
  * free scale only the oldest: the second is the two-view step's pose and BA may refine its
  * rotation and direction (KITTI 00's free scale 5.95 -> 4.49 %). With ground-truth or height

@@ -2,8 +2,8 @@
  * The VO's own types: keypoints, feature sets and matches. Plain C, shared by the detector door
  * (cv_shim), the matcher and the two-view estimator; nothing outside src/vo/ uses them.
  */
-#ifndef MVOD_VO_TYPES_H
-#define MVOD_VO_TYPES_H
+#ifndef MVOD_VO_CORE_TYPES_H
+#define MVOD_VO_CORE_TYPES_H
 
 #include <stdint.h>
 

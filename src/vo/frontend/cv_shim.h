@@ -10,7 +10,7 @@
 
 #include "mvod/calib.h"
 #include "mvod/image.h"
-#include "mvod/vo.h"
+#include "mvod/vo_types.h"
 #include "vo/core/types.h"
 
 #ifdef __cplusplus
@@ -65,16 +65,6 @@ int mvod_cv_nn_search(struct mvod_cv_nn *nn, const struct mvod_features *a,
 		      const struct mvod_features *b, float *best_a, float *second_a, int *idx_a,
 		      int *idx_b);
 void mvod_cv_nn_destroy(struct mvod_cv_nn *nn);
-
-/*
- * Essential matrix (five-point) from normalised correspondences x1 -> x2 (n x 2 each), so
- * that x2^T E x1 = 0, by MAGSAC++ or by classic RANSAC; thresh is in normalised units (pixels
- * over focal length). mask[n] gets 1 for inliers. -ENODATA when no model is found.
- */
-int mvod_cv_find_essential(const double *x1, const double *x2, int n, bool magsac, double thresh,
-			   double conf, double E[9], uint8_t *mask, int *n_inliers);
-/* The four candidates are (R1, t), (R1, -t), (R2, t), (R2, -t); |t| = 1. */
-int mvod_cv_decompose_essential(const double E[9], double R1[9], double R2[9], double t[3]);
 
 #ifdef __cplusplus
 }

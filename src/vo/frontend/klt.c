@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "klt_shim.h"
-#include "vo/core/scale.h"
+#include "vo/core/camera.h"
 #include "util/kernels.h"
 
 /*

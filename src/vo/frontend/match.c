@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "cv_shim.h"
+#include "vo/core/hamming.h"
 
 struct mvod_matcher {
 	struct mvod_match_params p;
@@ -23,11 +24,6 @@ struct mvod_matcher {
 static bool uses_flann(enum mvod_matcher_kind k)
 {
 	return k == MVOD_MATCHER_FLANN || k == MVOD_MATCHER_FLANN_RATIO;
-}
-
-bool mvod_matcher_uses_ratio(enum mvod_matcher_kind k)
-{
-	return k == MVOD_MATCHER_BF || k == MVOD_MATCHER_BF_RATIO || k == MVOD_MATCHER_FLANN_RATIO;
 }
 
 static bool uses_cross_check(enum mvod_matcher_kind k)

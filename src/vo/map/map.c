@@ -1,11 +1,12 @@
 #include "map.h"
 
-#include "vo/frontend/match.h"
-
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "mvod/geom.h"
+#include "vo/core/hamming.h"
 
 struct mvod_map {
 	struct mvod_map_params p;
@@ -250,20 +251,13 @@ int mvod_map_set_pose(struct mvod_map *m, mvod_map_id kf, const double Rcw[9],
 	return 0;
 }
 
-void mvod_map_scale_pose(const double Rcw[9], double tcw[3], const double centre[3], double s)
-{
-	for (int r = 0; r < 3; r++)
-		tcw[r] = s * tcw[r] + (s - 1) * (Rcw[3 * r] * centre[0] + Rcw[3 * r + 1] * centre[1] +
-						 Rcw[3 * r + 2] * centre[2]);
-}
-
 int mvod_map_rescale(struct mvod_map *m, const double centre[3], double s)
 {
 	if (!(s > 0 && isfinite(s)))
 		return -EINVAL;
 	for (int i = 0; i < m->kf_n; i++) {
 		struct mvod_map_keyframe *k = &m->kf[(m->kf_head + i) % m->p.kf_cap];
-		mvod_map_scale_pose(k->Rcw, k->tcw, centre, s);
+		mvod_rigid_scale(k->Rcw, k->tcw, centre, s);
 	}
 	for (int i = 0; i < m->p.point_cap; i++)
 		for (int k = 0; k < 3 && m->pt[i].id != MVOD_MAP_NONE; k++)

@@ -18,10 +18,9 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "vo/core/id.h"
+
 #define MVOD_MAP_DESC_BYTES 32 /* ORB */
-/* Id: generation (>= 1) in the high 32 bits, slot in the low 32; 0 is never an id. */
-typedef uint64_t mvod_map_id;
-#define MVOD_MAP_NONE ((mvod_map_id)0)
 
 /* A keypoint as map mode needs it: position in pixels, pyramid level (scale 1.2^octave). */
 struct mvod_map_kp {
@@ -53,11 +52,6 @@ struct mvod_map_params {
 
 /* ORB-SLAM's values above; sizes for KITTI: 7 keyframes of 2000 keypoints, 20 000 points. */
 void mvod_map_params_default(struct mvod_map_params *p);
-
-struct mvod_map_obs {
-	mvod_map_id kf;
-	int kp; /* keypoint index in that keyframe */
-};
 
 /* Read-only views; change them only through the functions below. */
 struct mvod_map_keyframe {
@@ -118,12 +112,6 @@ int mvod_map_add_keyframe(struct mvod_map *m, const struct mvod_map_kf_in *in, m
 const struct mvod_map_keyframe *mvod_map_keyframe(const struct mvod_map *m, mvod_map_id id);
 int mvod_map_set_pose(struct mvod_map *m, mvod_map_id kf, const double Rcw[9],
 		      const double tcw[3]);
-/*
- * A camera-from-world pose whose world is scaled by s about centre (world frame): the camera's
- * centre c goes to centre + s (c - centre), its rotation stays; tcw becomes
- * s tcw + (s - 1) Rcw centre.
- */
-void mvod_map_scale_pose(const double Rcw[9], double tcw[3], const double centre[3], double s);
 /*
  * Scales the whole map by s (> 0) about centre (world frame): every point and every keyframe's
  * centre moves to centre + s (X - centre); observations and rotations stay (a map's unit is

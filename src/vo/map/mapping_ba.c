@@ -3,11 +3,11 @@
  * the window is copied into the thread's job and posted; at the start of a later frame the
  * result is written back into the map. Everything in between, the frame thread tracks on.
  */
-#include "mapvo.h"
-
 #include <string.h>
 
+#include "internal.h"
 #include "mvod/geom.h"
+#include "vo/core/camera.h"
 
 /* Bundle adjustment's Levenberg-Marquardt iterations per keyframe. */
 #define BA_ITERATIONS 5
@@ -21,26 +21,18 @@
  * 1.087).
  */
 #define BA_FUNCTION_TOLERANCE 1e-4
-/*
- * Solved by ba_lm.c's Levenberg-Marquardt, not Ceres: the same steps (unit/ba compares them;
- * the KITTI clip table is unchanged, every map trajectory within 1e-7 m of Ceres's but 07 orb
- * auto's, 2e-5 m, and KITTI 00's free-scale t_rel is Ceres's 4.20 / 3.01 / 4.68 %) for about a
- * third of the instructions: KITTI 06 (callgrind, --scale gt) 92.3e6 -> 85.1e6 a frame,
- * two-view 83.7e6 (BENCHMARKS.md, mapspeed3).
- */
-#define BA_OWN_SOLVER true
 
-/* Index of kf among the window's keyframes (mv->kfs, nk of them), or -1. */
-static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
+/* Index of kf among the window's keyframes (m->kfs, nk of them), or -1. */
+static int kf_index(const struct mvod_mapmode *m, int nk, mvod_map_id kf)
 {
 	for (int i = 0; i < nk; i++)
-		if (mv->kfs[i] == kf)
+		if (m->kfs[i] == kf)
 			return i;
 	return -1;
 }
 
 /*
- * The gauge (mapvo.h): the oldest n_held keyframes held (never the newest), but in a map's
+ * The gauge (internal.h): the oldest n_held keyframes held (never the newest), but in a map's
  * first window (its two keyframes) with free scale only the oldest. The second keyframe's pose
  * there is the two-view step's (essential matrix, length from the old map or the last speed),
  * never refined against the map's points: held, its rotation and direction stay as the step
@@ -50,7 +42,7 @@ static int kf_index(const struct mvod_mapvo *mv, int nk, mvod_map_id kf)
  * the truth and with --scale height the map is rescaled at its keyframes, and freeing it there
  * cost KITTI 07 map klt height scale drift 1.119 -> 1.168 and map orb height direction 3.88 ->
  * 4.72 deg (BENCHMARKS.md). Freeing it with free scale: mvod-synth's KITTI 00 t_rel 5.95 ->
- * 4.49 %. How many are held (n_held: 3 with KLT, 2 with descriptors): mapvo.c.
+ * 4.49 %. How many are held (n_held: 3 with KLT, 2 with descriptors): mapmode.c.
  */
 bool mvod_mapping_ba_held(bool free_scale, int n_held, int nk, int i)
 {
@@ -60,54 +52,35 @@ bool mvod_mapping_ba_held(bool free_scale, int n_held, int nk, int i)
 }
 
 /* The window into j: poses of the nk keyframes, points seen twice or more, observations. */
-static void snapshot(struct mvod_mapvo *mv, int nk, struct mvod_ba_job *j)
+static void snapshot(struct mvod_mapmode *m, int nk, struct mvod_ba_job *j)
 {
 	for (int i = 0; i < nk; i++) {
-		const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, mv->kfs[i]);
+		const struct mvod_map_keyframe *k = mvod_map_keyframe(m->map, m->kfs[i]);
 		mvod_rot_log(k->Rcw, j->poses + 6 * i);
 		memcpy(j->poses + 6 * i + 3, k->tcw, sizeof(k->tcw));
-		j->fixed[i] = mvod_mapping_ba_held(mv->free_scale, mv->n_held, nk, i);
-		j->kf[i] = mv->kfs[i];
+		j->fixed[i] = mvod_mapping_ba_held(m->free_scale, m->n_held, nk, i);
+		j->kf[i] = m->kfs[i];
 	}
-	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), nb = 0, no = 0;
+	int np = mvod_map_points(m->map, m->ids, m->mp.point_cap), nb = 0, no = 0;
 	for (int i = 0; i < np; i++) {
-		const struct mvod_map_point *pt = mvod_map_point(mv->map, mv->ids[i]);
+		const struct mvod_map_point *pt = mvod_map_point(m->map, m->ids[i]);
 		if (pt->n_obs < 2)
 			continue;
 		for (int o = 0; o < pt->n_obs; o++) {
-			const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, pt->obs[o].kf);
+			const struct mvod_map_keyframe *k = mvod_map_keyframe(m->map, pt->obs[o].kf);
 			const struct mvod_map_kp *kp = &k->kp[pt->obs[o].kp];
-			j->obs[no] = (struct mvod_ba_obs){kf_index(mv, nk, pt->obs[o].kf), nb, kp->x,
-							  kp->y, mvod_mapvo_sigma(kp->octave)};
+			j->obs[no] = (struct mvod_ba_obs){kf_index(m, nk, pt->obs[o].kf), nb, kp->x,
+							  kp->y, mvod_orb_sigma(kp->octave)};
 			j->obs_kf[no++] = pt->obs[o].kf;
 		}
 		memcpy(j->points + 3 * nb, pt->pos, sizeof(pt->pos));
-		j->pt[nb++] = mv->ids[i];
+		j->pt[nb++] = m->ids[i];
 	}
 	j->p = (struct mvod_ba_problem){nk, nb, no, j->poses, j->points, j->fixed, j->obs,
-					j->outlier, mv->K[0], mv->K[1], mv->K[2], mv->K[3]};
+					j->outlier, m->K[0], m->K[1], m->K[2], m->K[3]};
 	mvod_ba_options_default(&j->o);
 	j->o.max_iterations = BA_ITERATIONS;
 	j->o.function_tolerance = BA_FUNCTION_TOLERANCE;
-	j->o.own_solver = BA_OWN_SOLVER;
-}
-
-/* A keyframe's camera-from-world pose before (Rk, tk) and after (R, t) bundle adjustment. */
-struct move {
-	double Rk[9], tk[3], R[9], t[3];
-};
-
-/* Camera Rc, tc keeps its pose relative to the keyframe: Rc Rk^T R, Rc Rk^T (t - tk) + tc. */
-static void move_camera(const struct move *m, double Rc[9], double tc[3])
-{
-	double C[9], d[3], dc[3];
-	mvod_mat3_mul_bt(Rc, m->Rk, C);
-	mvod_mat3_mul(C, m->R, Rc);
-	for (int i = 0; i < 3; i++)
-		d[i] = m->t[i] - m->tk[i];
-	mvod_mat3_vec(C, d, dc);
-	for (int i = 0; i < 3; i++)
-		tc[i] += dc[i];
 }
 
 /*
@@ -116,48 +89,45 @@ static void move_camera(const struct move *m, double Rc[9], double tc[3])
  * they are: moving them rigidly with it too was worse on KITTI 07 (free scale, BA on its
  * thread: scale drift 6.1 and 9.1 in two runs, against 5.3 and 2.9 without).
  */
-static void move_tracked(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
+static void move_tracked(struct mvod_mapmode *m, const struct mvod_ba_job *j)
 {
 	int last = j->p.n_poses - 1;
-	const struct mvod_map_keyframe *k = last >= 0 ? mvod_map_keyframe(mv->map, j->kf[last]) : NULL;
+	const struct mvod_map_keyframe *k = last >= 0 ? mvod_map_keyframe(m->map, j->kf[last]) : NULL;
 	if (!k)
 		return; /* left the map (evicted, or the map was lost) */
-	struct move m;
-	memcpy(m.Rk, k->Rcw, sizeof(m.Rk));
-	memcpy(m.tk, k->tcw, sizeof(m.tk));
-	mvod_rot_exp(j->poses + 6 * last, m.R);
-	memcpy(m.t, j->poses + 6 * last + 3, sizeof(m.t));
-	move_camera(&m, mv->Rcw, mv->tcw);
+	double R[9];
+	mvod_rot_exp(j->poses + 6 * last, R);
+	mvod_tracked_follow(&m->cam, k->Rcw, k->tcw, R, j->poses + 6 * last + 3);
 }
 
 /*
  * The solution back into the map, where its ids are still alive (a stale id's set or remove
  * fails and changes nothing); outlying observations leave their points.
  */
-static void apply(struct mvod_mapvo *mv, const struct mvod_ba_job *j)
+static void apply(struct mvod_mapmode *m, const struct mvod_ba_job *j)
 {
-	move_tracked(mv, j);
+	move_tracked(m, j);
 	for (int i = 0; i < j->p.n_poses; i++) {
 		double R[9];
 		mvod_rot_exp(j->poses + 6 * i, R);
-		mvod_map_set_pose(mv->map, j->kf[i], R, j->poses + 6 * i + 3);
+		mvod_map_set_pose(m->map, j->kf[i], R, j->poses + 6 * i + 3);
 	}
 	for (int i = 0; i < j->p.n_points; i++)
-		mvod_map_set_point(mv->map, j->pt[i], j->points + 3 * i);
+		mvod_map_set_point(m->map, j->pt[i], j->points + 3 * i);
 	for (int o = 0; o < j->p.n_obs; o++)
 		if (j->outlier[o])
-			mvod_map_remove_obs(mv->map, j->pt[j->obs[o].point], j->obs_kf[o]);
+			mvod_map_remove_obs(m->map, j->pt[j->obs[o].point], j->obs_kf[o]);
 }
 
 /* A finished bundle adjustment into the map; with wait, a running one is waited for. */
-static int land(struct mvod_mapvo *mv, bool wait)
+static int land(struct mvod_mapmode *m, bool wait)
 {
 	struct mvod_ba_job *j;
-	if (!mvod_ba_thread_take(mv->bat, wait, &j))
+	if (!mvod_ba_thread_take(m->bat, wait, &j))
 		return 0;
 	if (j->ret)
 		return j->ret;
-	apply(mv, j);
+	apply(m, j);
 	return 0;
 }
 
@@ -166,23 +136,23 @@ static int land(struct mvod_mapvo *mv, bool wait)
  * first: skipping instead left the first keyframes of KITTI 07 (frames 18, 25, 29, in its
  * opening turn) unrefined, and its scale drift went from 1.38 (inline) to 5.3; waiting, 2.3.
  */
-int mvod_mapping_ba_settle(struct mvod_mapvo *mv)
+int mvod_mapping_ba_settle(struct mvod_mapmode *m)
 {
-	return !mvod_ba_thread_job(mv->bat) ? land(mv, true) : 0;
+	return !mvod_ba_thread_job(m->bat) ? land(m, true) : 0;
 }
 
-int mvod_mapping_ba(struct mvod_mapvo *mv)
+int mvod_mapping_ba(struct mvod_mapmode *m)
 {
-	int ret = mvod_mapping_ba_settle(mv);
+	int ret = mvod_mapping_ba_settle(m);
 	if (ret)
 		return ret;
-	struct mvod_ba_job *j = mvod_ba_thread_job(mv->bat);
-	snapshot(mv, mvod_map_keyframes(mv->map, mv->kfs, mv->mp.kf_cap), j);
-	mvod_ba_thread_post(mv->bat);
+	struct mvod_ba_job *j = mvod_ba_thread_job(m->bat);
+	snapshot(m, mvod_map_keyframes(m->map, m->kfs, m->mp.kf_cap), j);
+	mvod_ba_thread_post(m->bat);
 	return 0;
 }
 
-int mvod_mapping_ba_poll(struct mvod_mapvo *mv)
+int mvod_mapping_ba_poll(struct mvod_mapmode *m)
 {
-	return land(mv, mv->ba_sync);
+	return land(m, m->ba_sync);
 }

@@ -8,13 +8,14 @@
  * map rescaled about the current camera. Bundle adjustment is landed first: a solve posted
  * before the rescale would bring back the old unit when it lands.
  */
-#include "mapvo.h"
-
 #include <math.h>
 #include <string.h>
 
-#include "vo/geom/motion.h"
+#include "internal.h"
 #include "mvod/geom.h"
+#include "vo/core/camera.h"
+#include "vo/geom/ground.h"
+#include "vo/geom/motion.h"
 
 /*
  * The map is rescaled when the filtered metres per map unit is this far from 1 (log: 2 %): at
@@ -82,22 +83,22 @@
  * 46 keyframes of 49, and the run stayed held until frame 27. At most vo->cap points (the
  * buffers' size), in the map's slot order.
  */
-static double band_ratio(struct mvod_vo *vo, const struct mvod_map_keyframe *k, double *q)
+static double band_ratio(struct mvod_mapmode *m, const struct mvod_map_keyframe *k, double *q)
 {
-	struct mvod_mapvo *mv = vo->mapvo;
+	const struct mvod_vo_ctx *c = m->c;
 	float quad[8];
 	*q = 0;
-	if (mvod_vo_band_quad(vo, quad) != 0)
+	if (mvod_camera_band_quad(c->cam, c->scale->filter.ground_n, quad) != 0)
 		return NAN;
-	int np = mvod_map_points(mv->map, mv->ids, mv->mp.point_cap), m = 0;
-	for (int i = 0; i < np && m < vo->cap; i++) {
-		double *X = vo->prev_pts + 3 * m, uv[2];
-		mvod_rigid_apply(k->Rcw, k->tcw, mvod_map_point(mv->map, mv->ids[i])->pos, X);
-		m += mvod_pinhole_pixel(mv->K, X, uv) &&
+	int np = mvod_map_points(m->map, m->ids, m->mp.point_cap), n = 0;
+	for (int i = 0; i < np && n < m->cap; i++) {
+		double *X = m->pts + 3 * n, uv[2];
+		mvod_rigid_apply(k->Rcw, k->tcw, mvod_map_point(m->map, m->ids[i])->pos, X);
+		n += mvod_pinhole_pixel(m->K, X, uv) &&
 		     mvod_quad_contains(quad, (float)uv[0], (float)uv[1]);
 	}
-	return mvod_scale_height_ratio(&vo->scale, vo->prev_pts, m, vo->p.camera_height_m,
-				       vo->scratch, q);
+	return mvod_ground_height_ratio(&c->scale->filter, m->pts, n, c->scale->height_m,
+					m->scratch, q);
 }
 
 /*
@@ -111,171 +112,166 @@ static double band_ratio(struct mvod_vo *vo, const struct mvod_map_keyframe *k, 
  * the map's 10-60 band points do), two-view's own band +1.8 % and +0.2 %. 06's +1.7 % is
  * the clip's (its road under a 1.65 m camera), not the method's.
  */
-static double pair_ratio(struct mvod_vo *vo, double *q)
+static double pair_ratio(struct mvod_mapmode *m, double *q)
 {
-	struct mvod_mapvo *mv = vo->mapvo;
-	const struct mvod_camera *cam = &vo->cam;
+	const struct mvod_vo_ctx *c = m->c;
+	const struct mvod_frames *fr = c->fr;
+	const double *vt = m->cam.vt;
 	float quad[8];
 	*q = 0;
-	double len = sqrt(mv->vt[0] * mv->vt[0] + mv->vt[1] * mv->vt[1] + mv->vt[2] * mv->vt[2]);
-	if (!(len > 0) || mvod_vo_band_quad(vo, quad) != 0)
+	double len = mvod_tracked_speed(&m->cam);
+	if (!(len > 0) || mvod_camera_band_quad(c->cam, c->scale->filter.ground_n, quad) != 0)
 		return NAN;
-	int m = 0;
-	for (int i = 0; i < vo->klt_matches && m < vo->cap; i++) {
-		const struct mvod_keypoint *ka = &vo->ref->f.kp[vo->matches[i].a];
-		const struct mvod_keypoint *kb = &vo->cur->f.kp[vo->matches[i].b];
+	int n = 0;
+	for (int i = 0; i < fr->n_matches && n < m->cap; i++) {
+		const struct mvod_keypoint *ka = &fr->ref->f.kp[fr->matches[i].a];
+		const struct mvod_keypoint *kb = &fr->cur->f.kp[fr->matches[i].b];
 		if (!mvod_quad_contains(quad, kb->x, kb->y))
 			continue;
-		double x1[3] = {(ka->x - cam->cx) / cam->fx, (ka->y - cam->cy) / cam->fy, 1};
-		double x2[3] = {(kb->x - cam->cx) / cam->fx, (kb->y - cam->cy) / cam->fy, 1}, a[3];
-		mvod_mat3_vec(mv->vR, x1, a);
-		/* d1 a + vt = d2 x2 in least squares: the rays' closest points. */
-		double aa = 0, ab = 0, bb = 0, at = 0, bt = 0;
-		for (int k = 0; k < 3; k++) {
-			aa += a[k] * a[k];
-			ab += a[k] * x2[k];
-			bb += x2[k] * x2[k];
-			at += a[k] * mv->vt[k];
-			bt += x2[k] * mv->vt[k];
-		}
-		double det = aa * bb - ab * ab;
-		if (!(det > 1e-12))
+		double x1[2], x2[2], d1, d2;
+		mvod_camera_normalise(c->cam, ka->x, ka->y, x1);
+		mvod_camera_normalise(c->cam, kb->x, kb->y, x2);
+		/* d1 vR x1 + vt = d2 x2 in least squares: the rays' closest points. */
+		if (!mvod_triangulate_midpoint(m->cam.vR, vt, x1, x2, &d1, &d2) ||
+		    !(d1 > 0 && d2 > 0 && d2 <= MVOD_MOTION_SCALE_DEPTH * len))
 			continue;
-		double d1 = (ab * bt - at * bb) / det, d2 = (aa * bt - ab * at) / det;
-		if (!(d1 > 0 && d2 > 0 && d2 <= MVOD_MOTION_SCALE_DEPTH * len))
-			continue;
-		double *X = vo->cur_pts + 3 * m, gap = 0;
+		double a[3], r1[3] = {x1[0], x1[1], 1}, *X = m->pts + 3 * n, gap = 0;
+		mvod_mat3_vec(m->cam.vR, r1, a);
 		for (int k = 0; k < 3; k++) {
-			double p1 = d1 * a[k] + mv->vt[k], p2 = d2 * x2[k];
+			double p1 = d1 * a[k] + vt[k], p2 = d2 * (k < 2 ? x2[k] : 1);
 			X[k] = 0.5 * (p1 + p2);
 			gap += (p1 - p2) * (p1 - p2);
 		}
-		m += sqrt(gap) * cam->fx < PAIR_GAP_PX * d2;
+		n += sqrt(gap) * c->cam->fx < PAIR_GAP_PX * d2;
 	}
-	return mvod_scale_height_ratio(&vo->scale, vo->cur_pts, m, vo->p.camera_height_m,
-				       vo->scratch, q);
+	return mvod_ground_height_ratio(&c->scale->filter, m->pts, n, c->scale->height_m,
+					m->scratch, q);
 }
 
-/* The map, the tracked frame, its velocity and the published pose scaled by s about c. */
-static int rescale(struct mvod_vo *vo, const double c[3], double s)
+/* The map, the tracked frame, its velocity and the pose to publish scaled by s about c. */
+static int rescale(struct mvod_mapmode *m, const double c[3], double s, struct mvod_step *st)
 {
-	struct mvod_mapvo *mv = vo->mapvo;
-	int ret = mvod_map_rescale(mv->map, c, s);
+	int ret = mvod_map_rescale(m->map, c, s);
 	if (ret)
 		return ret;
-	mvod_map_scale_pose(mv->Rcw, mv->tcw, c, s);
-	for (int k = 0; k < 3; k++) {
-		mv->vt[k] *= s;
-		vo->pose.t[k] = c[k] + s * (vo->pose.t[k] - c[k]);
-	}
-	mv->unit_log = 0;
+	mvod_tracked_rescale(&m->cam, c, s);
+	for (int k = 0; k < 3; k++)
+		st->pose.t[k] = c[k] + s * (st->pose.t[k] - c[k]);
+	m->c->scale->unit_log = 0;
 	return 0;
 }
 
-enum mvod_scale_source mvod_mapscale_frame(struct mvod_vo *vo)
+enum mvod_scale_source mvod_mapscale_frame(struct mvod_mapmode *m)
 {
-	struct mvod_mapvo *mv = vo->mapvo;
-	if (vo->p.scale_mode == MVOD_SCALE_MODE_GT)
+	struct mvod_scale *sc = m->c->scale;
+	const struct mvod_frames *fr = m->c->fr;
+	if (sc->mode == MVOD_SCALE_MODE_GT)
 		return MVOD_SCALE_GROUND_TRUTH;
-	if (vo->p.scale_mode != MVOD_SCALE_MODE_EXTERNAL)
+	if (sc->mode != MVOD_SCALE_MODE_EXTERNAL)
 		return MVOD_SCALE_MAP;
-	if (!isfinite(vo->cur->odo)) {
+	if (!isfinite(fr->cur->odo)) {
 		bool used;
-		mvod_scale_filter_step(&vo->scale, NAN, 0, &used); /* confidence decays */
+		mvod_scale_filter_step(&sc->filter, NAN, 0, &used); /* confidence decays */
 		return MVOD_SCALE_MAP;
 	}
-	double d = vo->cur->odo - vo->ref->odo;
+	double d = fr->cur->odo - fr->ref->odo;
 	if (d > 0) {
-		mv->odo_path += d;
-		mv->map_path += sqrt(mv->vt[0] * mv->vt[0] + mv->vt[1] * mv->vt[1] +
-				     mv->vt[2] * mv->vt[2]);
+		sc->odo_path += d;
+		sc->map_path += mvod_tracked_speed(&m->cam);
 	}
 	return MVOD_SCALE_EXTERNAL;
 }
 
 /* --scale external: metres per map unit over the path since the last one; NAN without. */
-static double odo_ratio(struct mvod_mapvo *mv)
+static double odo_ratio(struct mvod_scale *sc)
 {
-	if (!(mv->odo_path > 0 && mv->map_path > 0))
+	if (!(sc->odo_path > 0 && sc->map_path > 0))
 		return NAN;
-	double r = mv->odo_path / mv->map_path;
+	double r = sc->odo_path / sc->map_path;
 	/*
 	 * Sums from zero at each measurement: kept instead at half or 0.8 of their value (a
 	 * longer, exponentially weighted path) cost every clip, exact speed or noisy (KITTI 07
 	 * KLT 0.087 -> 0.100 / 0.135 m, with noise 0.267 -> 0.299 / 0.357 m): the map's unit
 	 * moves between keyframes, and the older path measures the unit it had then.
 	 */
-	mv->odo_path = mv->map_path = 0;
+	sc->odo_path = sc->map_path = 0;
 	return r;
+}
+
+/*
+ * The filtered log unit after a measurement, cut by the bounded gain (height, after the first
+ * MVOD_MAPSCALE_WINDOW measurements), into slot: the rescale to apply (0: none).
+ */
+static double bounded_unit(struct mvod_scale *sc, double *slot, bool external)
+{
+	if (slot && !external && sc->n_measured > MVOD_MAPSCALE_WINDOW)
+		sc->unit_log = mvod_scale_bounded(sc->rescale_log, MVOD_MAPSCALE_WINDOW,
+						  sc->unit_log, MAP_RESCALE_CAP);
+	if (slot)
+		*slot = sc->unit_log;
+	return sc->unit_log;
 }
 
 /*
  * Measurement r (metres per map unit, NAN: none) of quality q into the filter; the map
  * rescaled when the filtered unit is off by enough (height: within the bounded gain).
  */
-static int apply(struct mvod_vo *vo, double r, double q)
+static int apply(struct mvod_mapmode *m, double r, double q, struct mvod_step *st)
 {
-	struct mvod_mapvo *mv = vo->mapvo;
-	bool external = vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL;
-	double gain = external ? EXT_GAIN : vo->klt ? PAIR_GAIN : vo->scale.gain;
-	double gate = external ? EXT_GATE : vo->scale.gate;
-	bool used, was_metric = mvod_scale_filter_metric(&vo->scale);
-	mv->unit_log += log(mvod_scale_filter_step_gain(&vo->scale, r / exp(mv->unit_log), q, gain,
-							gate, &used));
+	struct mvod_scale *sc = m->c->scale;
+	bool external = sc->mode == MVOD_SCALE_MODE_EXTERNAL;
+	double gain = external ? EXT_GAIN : m->c->klt ? PAIR_GAIN : sc->filter.gain;
+	double gate = external ? EXT_GATE : sc->filter.gate;
+	bool used, was_metric = mvod_scale_filter_metric(&sc->filter);
+	sc->unit_log += log(mvod_scale_filter_step_gain(&sc->filter, r / exp(sc->unit_log), q,
+							gain, gate, &used));
 	double *slot = NULL;
 	if (was_metric) {
-		slot = mv->rescale_log + mv->kf_scaled++ % MVOD_MAPSCALE_WINDOW;
+		slot = sc->rescale_log + sc->kf_scaled++ % MVOD_MAPSCALE_WINDOW;
 		*slot = 0;
 	}
-	mv->n_measured += used;
+	sc->n_measured += used;
 	double min = external ? EXT_RESCALE_MIN : MAP_RESCALE_MIN;
-	if (!used || (was_metric && fabs(mv->unit_log) < min))
+	if (!used || (was_metric && fabs(sc->unit_log) < min) ||
+	    bounded_unit(sc, slot, external) == 0)
 		return 0;
-	if (slot && !external && mv->n_measured > MVOD_MAPSCALE_WINDOW) {
-		mv->unit_log = mvod_scale_bounded(mv->rescale_log, MVOD_MAPSCALE_WINDOW,
-						  mv->unit_log, MAP_RESCALE_CAP);
-		if (mv->unit_log == 0)
-			return 0;
-	}
-	if (slot)
-		*slot = mv->unit_log;
 	/*
 	 * The first measurement rescales about the world's origin: the chain before it was in
-	 * the map's unit and unpublished (vo.c holds it). Later ones about the current camera:
-	 * published poses are never rewritten, the path goes on from where it is.
+	 * the map's unit and unpublished (core/scale.h holds it). Later ones about the current
+	 * camera: published poses are never rewritten, the path goes on from where it is.
 	 */
 	double c[3] = {0, 0, 0};
 	if (was_metric)
-		memcpy(c, vo->pose.t, sizeof(c));
-	return rescale(vo, c, exp(mv->unit_log));
+		memcpy(c, st->pose.t, sizeof(c));
+	return rescale(m, c, exp(sc->unit_log), st);
 }
 
-int mvod_mapscale_keyframe(struct mvod_vo *vo, mvod_map_id kf)
+int mvod_mapscale_keyframe(struct mvod_mapmode *m, mvod_map_id kf, struct mvod_step *st)
 {
-	struct mvod_mapvo *mv = vo->mapvo;
-	bool external = vo->p.scale_mode == MVOD_SCALE_MODE_EXTERNAL;
-	if (vo->p.scale_mode != MVOD_SCALE_MODE_HEIGHT && !external)
+	struct mvod_scale *sc = m->c->scale;
+	bool external = sc->mode == MVOD_SCALE_MODE_EXTERNAL;
+	if (sc->mode != MVOD_SCALE_MODE_HEIGHT && !external)
 		return 0;
-	int ret = mvod_mapping_ba_settle(mv);
+	int ret = mvod_mapping_ba_settle(m);
 	if (ret)
 		return ret;
 	if (external) {
-		double r = odo_ratio(mv);
+		double r = odo_ratio(sc);
 		/* Standing, or no speed: nothing measured, the map keeps its unit. */
-		return isnan(r) ? 0 : apply(vo, r, 1.0);
+		return isnan(r) ? 0 : apply(m, r, 1.0, st);
 	}
 	/*
 	 * The last frame's direction of travel (its camera centre from the frame before's: -vt
-	 * in its frame) levels the expected ground normal (scale.h). On mvod-synth's KITTI 00
-	 * drive, whose ground follows the path, the normal learnt from the ground fits alone
+	 * in its frame) levels the expected ground normal (core/scale.h). On mvod-synth's KITTI
+	 * 00 drive, whose ground follows the path, the normal learnt from the ground fits alone
 	 * pitched 2.15 deg (median, frames 0-1500) where the camera is pitched 0.88 deg to the
 	 * road: the heights ran 5-9 % high. Levelled with the motion: 0.86 deg.
 	 */
-	double back[3] = {-mv->vt[0], -mv->vt[1], -mv->vt[2]};
-	mvod_scale_filter_motion(&vo->scale, back);
-	const struct mvod_map_keyframe *k = mvod_map_keyframe(mv->map, kf);
+	double back[3] = {-m->cam.vt[0], -m->cam.vt[1], -m->cam.vt[2]};
+	mvod_scale_filter_motion(&sc->filter, back);
+	const struct mvod_map_keyframe *k = mvod_map_keyframe(m->map, kf);
 	if (!k)
 		return 0;
-	double q, r = vo->klt ? pair_ratio(vo, &q) : band_ratio(vo, k, &q);
-	return apply(vo, r, q);
+	double q, r = m->c->klt ? pair_ratio(m, &q) : band_ratio(m, k, &q);
+	return apply(m, r, q, st);
 }

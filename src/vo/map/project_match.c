@@ -5,7 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "vo/frontend/match.h"
+#include "vo/core/hamming.h"
 #include "mvod/geom.h"
 
 struct mvod_pm {

@@ -1,13 +1,12 @@
 /*
- * Windowed bundle adjustment without Ceres: the same problem, options and result as
- * ba_shim.h's mvod_ba_solve, solved by a Levenberg-Marquardt written for map mode's window
- * (at most 64 poses) on buffers allocated at create time (ba_lm.c says what of Ceres it
- * follows). Plain C, built with or without Ceres.
+ * Map mode's windowed bundle adjustment (ba.h's problem), solved by a Levenberg-Marquardt
+ * written for its window (at most 64 poses) on buffers allocated at create time (ba_lm.c says
+ * what of Ceres it follows; tests/unit/test_ba.c compares the two). Plain C.
  */
 #ifndef MVOD_BA_LM_H
 #define MVOD_BA_LM_H
 
-#include "ba_shim.h"
+#include "ba.h"
 
 struct mvod_ba_lm;
 

@@ -1,7 +1,7 @@
 /*
  * Windowed bundle adjustment off the frame path: one job buffer, sized at create for the
  * largest window, that changes hands between the frame thread (which fills it with a snapshot
- * of the window and posts it) and a thread of its own (which solves it with Ceres), as capture
+ * of the window and posts it) and a thread of its own (which solves it: ba_lm.h), as capture
  * hands frames over in its mailbox. The frame thread never touches the job while it is posted;
  * the BA thread touches nothing else. Measured on KITTI 06/07 with bundle adjustment inline:
  * keyframe frames took up to 630 ms.
@@ -14,8 +14,8 @@
 
 #include <stdbool.h>
 
-#include "ba_shim.h"
-#include "vo/map/map.h"
+#include "ba.h"
+#include "vo/core/id.h"
 
 struct mvod_ba_job {
 	struct mvod_ba_problem p;   /* its arrays are those below */
@@ -35,7 +35,7 @@ struct mvod_ba_thread;
 
 /*
  * Starts the thread (named "mvod-ba") with a job for kf_cap keyframes and point_cap points.
- * -ENOTSUP when built without Ceres, -ENOMEM, or pthread_create's error.
+ * -ENOMEM, or pthread_create's error.
  */
 int mvod_ba_thread_create(int kf_cap, int point_cap, struct mvod_ba_thread **out);
 /* Waits for a running solve to end, then stops the thread. NULL is a no-op. */

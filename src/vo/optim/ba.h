@@ -1,15 +1,15 @@
 /*
- * The Ceres door of map mode: windowed bundle adjustment over caller-owned fixed arrays.
- * Plain C. Without Ceres (meson -Dceres=disabled, or libceres-dev absent) ba_none.c says so
- * (mvod_ba_present false, -ENOTSUP to every call), and map mode is not run
- * (vo.c, mvod_vo_run_mode).
+ * Map mode's windowed bundle adjustment problem: caller-owned fixed arrays of poses, points and
+ * observations, its options and result. ba_lm.h solves it (Ceres's trust-region
+ * Levenberg-Marquardt written for this problem); Ceres itself solves it only in the tests, as
+ * the reference ba_lm.c is compared with (tests/unit/ba_ceres.cpp).
  *
  * Poses are camera-from-world, X_cam = R(r) X_world + t, stored as 6 doubles: the angle-axis
  * vector r (radians; Ceres's AngleAxisRotatePoint) then t (map units). Pinhole projection
  * without distortion (mvod's preprocessed images): u = fx X/Z + cx, v = fy Y/Z + cy.
  */
-#ifndef MVOD_BA_SHIM_H
-#define MVOD_BA_SHIM_H
+#ifndef MVOD_VO_OPTIM_BA_H
+#define MVOD_VO_OPTIM_BA_H
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -50,11 +50,6 @@ struct mvod_ba_options {
 	 * of it (Ceres's function_tolerance); 0: Ceres's default, 1e-6.
 	 */
 	double function_tolerance;
-	/*
-	 * Who solves in mvod_ba_thread (ba_thread.h): false Ceres (mvod_ba_solve), true
-	 * ba_lm.c's own Levenberg-Marquardt (mvod_ba_lm_solve). mvod_ba_solve ignores it.
-	 */
-	bool own_solver;
 	double chi2_outlier; /* squared residual in sigma units above which an observation is
 			      * flagged (5.991: 95 % of inliers with 1-sigma noise pass) */
 };
@@ -72,34 +67,7 @@ static inline void mvod_ba_options_default(struct mvod_ba_options *o)
 	o->max_iterations = 10;
 	o->function_tolerance = 0;
 	o->chi2_outlier = 5.991;
-	o->own_solver = false;
 }
-
-/* Whether bundle adjustment is built in (Ceres); without it vo.c runs map mode as two-view. */
-extern const bool mvod_ba_present;
-
-struct mvod_ba;
-/* -ENOTSUP when built without Ceres. */
-int mvod_ba_create(struct mvod_ba **out);
-/*
- * Solves p in place. An observation whose point is behind its camera before solving is
- * flagged and left out. Poses not held and points observed are refined; the others are left
- * as they are. -EINVAL for an index out of range or a sigma <= 0; -EIO when Ceres fails.
- */
-int mvod_ba_solve(struct mvod_ba *ba, const struct mvod_ba_problem *p,
-		  const struct mvod_ba_options *o, struct mvod_ba_result *r);
-void mvod_ba_destroy(struct mvod_ba *ba);
-
-/*
- * For tests: the reprojection residual of observation o (its pose and point indices unused)
- * at pose and X, with the hand-written Jacobians bundle adjustment uses and with Ceres's
- * AutoDiff; how many of the 2 residuals and 18 Jacobian entries differ (a zero's sign aside), or
- * -1 when one of them evaluates and the other does not. *evaluated: both did (the point is in
- * front of the camera). -ENOTSUP without Ceres.
- */
-int mvod_ba_jacobian_mismatches(const double pose[6], const double X[3],
-				const struct mvod_ba_obs *o, double fx, double fy, double cx,
-				double cy, bool *evaluated);
 
 #ifdef __cplusplus
 }
