@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "lsq.h"
 #include "mvod/geom.h"
 #include "util/linalg.h"
 
@@ -301,47 +302,53 @@ static void normal_equations(const double R[9], const double t[3], const double 
 	}
 }
 
+/* The refinement as mvod_lsq_solve sees it: the state R (9) then t (3). */
+struct refine {
+	const double *x1, *x2, *w;
+	const uint8_t *mask;
+	int n;
+	double k;
+	double u[3], v[3]; /* the tangent basis of t where the normal equations were taken */
+};
+
+static double lsq_cost(void *ctx, const double *x)
+{
+	const struct refine *r = ctx;
+	return huber_cost(x, x + 9, r->x1, r->x2, r->w, r->mask, r->n, r->k);
+}
+
+static void lsq_normal(void *ctx, const double *x, double *A, double *g)
+{
+	struct refine *r = ctx;
+	tangent(x + 9, r->u, r->v);
+	normal_equations(x, x + 9, r->u, r->v, r->x1, r->x2, r->w, r->mask, r->n, r->k, A, g);
+}
+
+static void lsq_move(void *ctx, const double *x, const double *d, double *out)
+{
+	const struct refine *r = ctx;
+	perturb(x, x + 9, r->u, r->v, d, out, out + 9);
+}
+
+/* Levenberg-Marquardt: up to 10 tries an iteration, the damping grown until a step lowers the cost. */
 int mvod_motion_refine(double R[9], double t[3], const double *x1, const double *x2,
 		       const double *w, const uint8_t *mask, int n, double k, int iterations)
 {
 	double nt = mvod_vec3_norm(t);
 	if (!(nt > 0) || !(k > 0))
 		return -EINVAL;
+	struct refine r = {x1, x2, w, mask, n, k, {0}, {0}};
+	const struct mvod_lsq_problem lp = {5, 12, &r, lsq_cost, lsq_normal, lsq_move, NULL};
+	const struct mvod_lsq_options o = {.iterations = iterations, .tries = 10, .lambda = 1e-3,
+					   .lambda_min = 1e-9, .lambda_max = INFINITY,
+					   .damping = MVOD_LSQ_ADD, .stop_when_stuck = true};
+	double x[12];
+	memcpy(x, R, 9 * sizeof(double));
 	for (int j = 0; j < 3; j++)
-		t[j] /= nt;
-	double lambda = 1e-3, cost = huber_cost(R, t, x1, x2, w, mask, n, k);
-	int steps = 0;
-	for (int it = 0; it < iterations; it++) {
-		double u[3], v[3], A[25], g[5];
-		tangent(t, u, v);
-		normal_equations(R, t, u, v, x1, x2, w, mask, n, k, A, g);
-		bool improved = false;
-		/* Levenberg-Marquardt: the damping grows until a step lowers the cost. */
-		for (int tries = 0; tries < 10 && !improved; tries++) {
-			double M[25], x[5], Rn[9], tn[3];
-			memcpy(M, A, sizeof(M));
-			for (int a = 0; a < 5; a++) {
-				M[6 * a] += lambda * A[6 * a];
-				x[a] = -g[a];
-			}
-			if (!mvod_linsolve(M, x, 5))
-				return steps;
-			perturb(R, t, u, v, x, Rn, tn);
-			double cn = huber_cost(Rn, tn, x1, x2, w, mask, n, k);
-			if (cn < cost) {
-				memcpy(R, Rn, sizeof(Rn));
-				memcpy(t, tn, sizeof(tn));
-				cost = cn;
-				lambda = fmax(0.1 * lambda, 1e-9);
-				improved = true;
-				steps++;
-			} else {
-				lambda *= 10;
-			}
-		}
-		if (!improved)
-			break;
-	}
+		x[9 + j] = t[j] / nt;
+	int steps = mvod_lsq_solve(&lp, &o, x, NULL);
+	memcpy(R, x, 9 * sizeof(double));
+	memcpy(t, x + 9, 3 * sizeof(double));
 	return steps;
 }
 

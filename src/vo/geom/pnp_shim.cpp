@@ -8,6 +8,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 
+#include "lsq.h"
 #include "mvod/geom.h"
 #include "util/shim_guard.hpp"
 
@@ -111,6 +112,75 @@ static double sq_cost(const double *X, const double *uv, int n, const double K[4
 	return c;
 }
 
+/* The refinement as mvod_lsq_solve sees it: the state R (9) then t (3), the inliers' pixels. */
+struct refinement {
+	const double *X, *uv, *K;
+	const uint8_t *inlier;
+	int n;
+	double w0[3]; /* the start's rotation vector, for the step's stopping rule */
+};
+
+static double lsq_cost(void *ctx, const double *x)
+{
+	const refinement *r = (const refinement *)ctx;
+	return sq_cost(r->X, r->uv, r->n, r->K, r->inlier, x, x + 9);
+}
+
+/* The inliers' J^T J and J^T r at x, the Jacobians written out for the left perturbation. */
+static void lsq_normal(void *ctx, const double *x, double *A, double *g)
+{
+	const refinement *r = (const refinement *)ctx;
+	const double *K = r->K;
+	for (int i = 0; i < r->n; i++) {
+		if (!r->inlier[i])
+			continue;
+		double c[3];
+		mvod_rigid_apply(x, x + 9, r->X + 3 * i, c);
+		double iz = 1.0 / c[2];
+		double e[2] = {K[0] * c[0] * iz + K[2] - r->uv[2 * i],
+			       K[1] * c[1] * iz + K[3] - r->uv[2 * i + 1]};
+		/* d(uv)/dc times dc/d(w, tau) = [-[c]x | I] */
+		double du[3] = {K[0] * iz, 0, -K[0] * c[0] * iz * iz};
+		double dv[3] = {0, K[1] * iz, -K[1] * c[1] * iz * iz};
+		double J[2][6] = {{c[1] * du[2] - c[2] * du[1], c[2] * du[0] - c[0] * du[2],
+				   c[0] * du[1] - c[1] * du[0], du[0], du[1], du[2]},
+				  {c[1] * dv[2] - c[2] * dv[1], c[2] * dv[0] - c[0] * dv[2],
+				   c[0] * dv[1] - c[1] * dv[0], dv[0], dv[1], dv[2]}};
+		for (int k = 0; k < 2; k++)
+			for (int a = 0; a < 6; a++) {
+				g[a] += J[k][a] * e[k];
+				for (int b = a; b < 6; b++)
+					A[6 * a + b] += J[k][a] * J[k][b];
+			}
+	}
+	for (int a = 0; a < 6; a++)
+		for (int b = 0; b < a; b++)
+			A[6 * a + b] = A[6 * b + a];
+}
+
+/* The pose moved on the left: R' = exp(w) R, t' = exp(w) t + tau. */
+static void lsq_move(void *, const double *x, const double *d, double *out)
+{
+	double dR[9];
+	mvod_rot_exp(d, dR);
+	mvod_mat3_mul(dR, x, out);
+	mvod_mat3_vec(dR, x + 9, out + 9);
+	for (int q = 0; q < 3; q++)
+		out[9 + q] += d[3 + q];
+}
+
+/* solvePnPRefineLM's stop: a step below FLT_EPSILON of the start's rotation vector and t. */
+static bool lsq_converged(void *ctx, const double *x, const double *d)
+{
+	const refinement *r = (const refinement *)ctx;
+	double norm = 0, step = 0;
+	for (int q = 0; q < 6; q++)
+		step += d[q] * d[q];
+	for (int q = 0; q < 3; q++)
+		norm += r->w0[q] * r->w0[q] + x[9 + q] * x[9 + q];
+	return step <= (double)FLT_EPSILON * FLT_EPSILON * norm;
+}
+
 /*
  * Levenberg-Marquardt on the current inliers' squared pixel errors, from the current pose
  * (pnp->rvec, tvec in and out): what cv::solvePnPRefineLM minimised here before, with its
@@ -121,82 +191,35 @@ static double sq_cost(const double *X, const double *uv, int n, const double K[4
  * focal and centre derivatives, all thrown away) and Rodrigues' 3 x 9 Jacobian: 1.77e6 ->
  * 0.19e6 instructions a frame on KITTI 06 map klt (callgrind); the KITTI clips' map
  * trajectories within 1e-7 m of OpenCV's (klt; orb 07 free scale 1.3e-4 m) and every score
- * of their table unchanged (BENCHMARKS.md).
+ * of their table unchanged (BENCHMARKS.md). A singular system leaves the pose as it was.
  */
 static void refine(struct mvod_pnp *pnp, const double *X, const double *uv, int n,
 		   const double K[4], const uint8_t *inlier)
 {
-	double R[9], t[3], w0[3];
+	refinement r = {X, uv, K, inlier, n, {0, 0, 0}};
 	const double *rv = pnp->rvec.ptr<double>();
 	double *tv = pnp->tvec.ptr<double>();
-	std::copy(rv, rv + 3, w0);
-	mvod_rot_exp(w0, R);
-	std::copy(tv, tv + 3, t);
-	double c0 = sq_cost(X, uv, n, K, inlier, R, t), lambda = 1e-3;
-	for (int it = 0; it < 20; it++) {
-		double A[36] = {0}, g[6] = {0};
-		for (int i = 0; i < n; i++) {
-			if (!inlier[i])
-				continue;
-			double c[3];
-			mvod_rigid_apply(R, t, X + 3 * i, c);
-			double iz = 1.0 / c[2];
-			double r[2] = {K[0] * c[0] * iz + K[2] - uv[2 * i],
-				       K[1] * c[1] * iz + K[3] - uv[2 * i + 1]};
-			/* d(uv)/dc times dc/d(w, tau) = [-[c]x | I] */
-			double du[3] = {K[0] * iz, 0, -K[0] * c[0] * iz * iz};
-			double dv[3] = {0, K[1] * iz, -K[1] * c[1] * iz * iz};
-			double J[2][6] = {{c[1] * du[2] - c[2] * du[1], c[2] * du[0] - c[0] * du[2],
-					   c[0] * du[1] - c[1] * du[0], du[0], du[1], du[2]},
-					  {c[1] * dv[2] - c[2] * dv[1], c[2] * dv[0] - c[0] * dv[2],
-					   c[0] * dv[1] - c[1] * dv[0], dv[0], dv[1], dv[2]}};
-			for (int k = 0; k < 2; k++)
-				for (int a = 0; a < 6; a++) {
-					g[a] -= J[k][a] * r[k];
-					for (int b = a; b < 6; b++)
-						A[6 * a + b] += J[k][a] * J[k][b];
-				}
-		}
-		for (int a = 0; a < 6; a++)
-			for (int b = 0; b < a; b++)
-				A[6 * a + b] = A[6 * b + a];
-		double norm = 0, step = 0;
-		for (;;) {
-			double M[36], d[6], Rn[9], tn[3], dR[9];
-			std::copy(A, A + 36, M);
-			std::copy(g, g + 6, d);
-			for (int q = 0; q < 6; q++)
-				M[7 * q] *= 1 + lambda;
-			if (!mvod_linsolve(M, d, 6))
-				return;
-			mvod_rot_exp(d, dR);
-			mvod_mat3_mul(dR, R, Rn);
-			mvod_mat3_vec(dR, t, tn);
-			for (int q = 0; q < 3; q++)
-				tn[q] += d[3 + q];
-			double c1 = sq_cost(X, uv, n, K, inlier, Rn, tn);
-			step = 0;
-			for (int q = 0; q < 6; q++)
-				step += d[q] * d[q];
-			if (c1 < c0) {
-				std::copy(Rn, Rn + 9, R);
-				std::copy(tn, tn + 3, t);
-				c0 = c1;
-				lambda = std::max(lambda * 0.1, 1e-16);
-				break;
-			}
-			lambda *= 10;
-			if (lambda > 1e16)
-				break;
-		}
-		for (int q = 0; q < 3; q++)
-			norm += w0[q] * w0[q] + t[q] * t[q];
-		if (step <= (double)FLT_EPSILON * FLT_EPSILON * norm || lambda > 1e16)
-			break;
-	}
-	cv::Mat Rm(3, 3, CV_64F, R);
+	std::copy(rv, rv + 3, r.w0);
+	double x[12];
+	mvod_rot_exp(r.w0, x);
+	std::copy(tv, tv + 3, x + 9);
+	const struct mvod_lsq_problem lp = {6, 12, &r, lsq_cost, lsq_normal, lsq_move,
+					    lsq_converged};
+	struct mvod_lsq_options o = {};
+	o.iterations = 20;
+	o.tries = 0;
+	o.lambda = 1e-3;
+	o.lambda_min = 1e-16;
+	o.lambda_max = 1e16;
+	o.damping = MVOD_LSQ_SCALE;
+	o.stop_when_stuck = true;
+	bool singular;
+	mvod_lsq_solve(&lp, &o, x, &singular);
+	if (singular)
+		return;
+	cv::Mat Rm(3, 3, CV_64F, x);
 	cv::Rodrigues(Rm, pnp->rvec);
-	std::copy(t, t + 3, tv);
+	std::copy(x + 9, x + 12, tv);
 }
 
 /* Refinement rounds from the current pose and inliers (k of them), then the result out. */

@@ -4,8 +4,9 @@
 #include <math.h>
 #include <string.h>
 
-#include "mvod/geom.h"
+#include "lsq.h"
 #include "motion.h"
+#include "mvod/geom.h"
 
 /* The pose moved by d = (w, tau) on the left: R' = exp(w) R, t' = exp(w) t + tau. */
 static void perturb(const double R[9], const double t[3], const double d[6], double Ro[9],
@@ -136,7 +137,6 @@ static void epi_normal(const struct mvod_posefit *p, const double R[9], const do
 	}
 }
 
-
 /* The tracks within the gate at the start pose. */
 static int select_epi(struct mvod_posefit *p, const double R[9], const double t[3])
 {
@@ -152,30 +152,40 @@ static int select_epi(struct mvod_posefit *p, const double R[9], const double t[
 	return k;
 }
 
+/* The pose refinement as mvod_lsq_solve sees it: the state R (9) then t (3). */
+static double lsq_cost(void *ctx, const double *x)
+{
+	return cost(ctx, x, x + 9);
+}
+
+static void lsq_normal(void *ctx, const double *x, double *A, double *g)
+{
+	points_normal(ctx, x, x + 9, A, g);
+	epi_normal(ctx, x, x + 9, A, g);
+}
+
+static void lsq_move(void *ctx, const double *x, const double *d, double *out)
+{
+	perturb(x, x + 9, d, out, out + 9);
+}
+
+/*
+ * Levenberg-Marquardt from PnP's pose, which is close: one try an iteration (a refused step
+ * spends it; the next tries with ten times the damping), the damping from 1e-4.
+ */
 int mvod_posefit_refine(struct mvod_posefit *p, double R[9], double t[3])
 {
 	int used = select_epi(p, R, t);
-	double c0 = cost(p, R, t), lambda = 1e-4;
-	for (int it = 0; it < p->iterations; it++) {
-		double A[36] = {0}, g[6] = {0}, Rn[9], tn[3];
-		points_normal(p, R, t, A, g);
-		epi_normal(p, R, t, A, g);
-		for (int q = 0; q < 6; q++) {
-			A[7 * q] *= 1 + lambda;
-			g[q] = -g[q];
-		}
-		if (!mvod_linsolve(A, g, 6))
-			return -EINVAL;
-		perturb(R, t, g, Rn, tn);
-		double c1 = cost(p, Rn, tn);
-		if (!(c1 < c0)) {
-			lambda *= 10;
-			continue;
-		}
-		memcpy(R, Rn, 9 * sizeof(double));
-		memcpy(t, tn, 3 * sizeof(double));
-		c0 = c1;
-		lambda *= 0.1;
-	}
-	return used;
+	const struct mvod_lsq_problem lp = {6, 12, p, lsq_cost, lsq_normal, lsq_move, NULL};
+	const struct mvod_lsq_options o = {.iterations = p->iterations, .tries = 1,
+					   .lambda = 1e-4, .lambda_max = INFINITY,
+					   .damping = MVOD_LSQ_SCALE};
+	double x[12];
+	memcpy(x, R, 9 * sizeof(double));
+	memcpy(x + 9, t, 3 * sizeof(double));
+	bool singular;
+	mvod_lsq_solve(&lp, &o, x, &singular);
+	memcpy(R, x, 9 * sizeof(double));
+	memcpy(t, x + 9, 3 * sizeof(double));
+	return singular ? -EINVAL : used;
 }
