@@ -275,58 +275,53 @@ static double cost_at(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
 }
 
 /*
- * Corrected residuals and Jacobians at the problem's poses/points into b->o; at the first
- * call (first) the Jacobi scaling from them; then the Jacobians' columns scaled. The
- * unscaled gradient's largest entry into *gmax. False when a point is behind a camera.
+ * Observation i's corrected residual and Jacobians into b->o (Huber's sqrt(rho') applied) and
+ * its share of the unscaled gradient and, at the first call (first), of the Jacobi scaling.
+ * False when its point is behind its camera.
  */
-static bool linearize(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
-		      const struct mvod_ba_options *op, bool first, double *gmax)
+static bool linearize_obs(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
+			  const struct mvod_ba_options *op, bool first, int i)
 {
-	if (first) {
-		memset(b->sc_pose, 0, sizeof(double) * 6 * (size_t)p->n_poses);
-		memset(b->sc_pt, 0, sizeof(double) * 3 * (size_t)p->n_points);
+	const struct mvod_ba_obs *o = &p->obs[i];
+	struct lm_obs *e = &b->o[i];
+	if (!residual(p, o, b->rot + 36 * o->pose, p->poses + 6 * o->pose,
+		      p->points + 3 * o->point, e->r, e->Jp, e->Jx))
+		return false;
+	double k;
+	huber(e->r[0] * e->r[0] + e->r[1] * e->r[1], op->huber, &k);
+	if (k != 1.0) {
+		e->r[0] *= k;
+		e->r[1] *= k;
+		for (int c = 0; c < 12; c++)
+			e->Jp[c] *= k;
+		for (int c = 0; c < 6; c++)
+			e->Jx[c] *= k;
 	}
-	memset(b->gc, 0, sizeof(double) * 6 * (size_t)p->n_poses);
-	memset(b->gx, 0, sizeof(double) * 3 * (size_t)p->n_points);
-	rotations(b, p->poses, p->n_poses, true);
-	for (int i = 0; i < p->n_obs; i++) {
-		if (p->outlier[i])
-			continue;
-		const struct mvod_ba_obs *o = &p->obs[i];
-		struct lm_obs *e = &b->o[i];
-		if (!residual(p, o, b->rot + 36 * o->pose, p->poses + 6 * o->pose,
-			      p->points + 3 * o->point, e->r, e->Jp, e->Jx))
-			return false;
-		double k;
-		huber(e->r[0] * e->r[0] + e->r[1] * e->r[1], op->huber, &k);
-		if (k != 1.0) {
-			e->r[0] *= k;
-			e->r[1] *= k;
-			for (int c = 0; c < 12; c++)
-				e->Jp[c] *= k;
-			for (int c = 0; c < 6; c++)
-				e->Jx[c] *= k;
-		}
-		const bool freep = b->free_idx[o->pose] >= 0;
-		for (int c = 0; c < 6 && freep; c++) {
-			b->gc[6 * o->pose + c] += e->Jp[c] * e->r[0] + e->Jp[6 + c] * e->r[1];
-			if (first)
-				b->sc_pose[6 * o->pose + c] +=
-					e->Jp[c] * e->Jp[c] + e->Jp[6 + c] * e->Jp[6 + c];
-		}
-		for (int c = 0; c < 3; c++) {
-			b->gx[3 * o->point + c] += e->Jx[c] * e->r[0] + e->Jx[3 + c] * e->r[1];
-			if (first)
-				b->sc_pt[3 * o->point + c] +=
-					e->Jx[c] * e->Jx[c] + e->Jx[3 + c] * e->Jx[3 + c];
-		}
+	const bool freep = b->free_idx[o->pose] >= 0;
+	for (int c = 0; c < 6 && freep; c++) {
+		b->gc[6 * o->pose + c] += e->Jp[c] * e->r[0] + e->Jp[6 + c] * e->r[1];
+		if (first)
+			b->sc_pose[6 * o->pose + c] += e->Jp[c] * e->Jp[c] + e->Jp[6 + c] * e->Jp[6 + c];
 	}
+	for (int c = 0; c < 3; c++) {
+		b->gx[3 * o->point + c] += e->Jx[c] * e->r[0] + e->Jx[3 + c] * e->r[1];
+		if (first)
+			b->sc_pt[3 * o->point + c] += e->Jx[c] * e->Jx[c] + e->Jx[3 + c] * e->Jx[3 + c];
+	}
+	return true;
+}
+
+/*
+ * The unscaled gradient's largest entry; at the first call the Jacobi scaling from the sums;
+ * then the Jacobians' columns and the gradients scaled.
+ */
+static double scale_columns(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, bool first)
+{
 	double g = 0;
 	for (int c = 0; c < 6 * p->n_poses; c++)
 		g = fmax(g, fabs(b->gc[c]));
 	for (int c = 0; c < 3 * p->n_points; c++)
 		g = fmax(g, fabs(b->gx[c]));
-	*gmax = g;
 	if (first) {
 		for (int c = 0; c < 6 * p->n_poses; c++)
 			b->sc_pose[c] = 1.0 / (1.0 + sqrt(b->sc_pose[c]));
@@ -352,6 +347,28 @@ static bool linearize(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
 		b->gc[c] *= b->sc_pose[c];
 	for (int c = 0; c < 3 * p->n_points; c++)
 		b->gx[c] *= b->sc_pt[c];
+	return g;
+}
+
+/*
+ * Corrected residuals and Jacobians at the problem's poses/points into b->o; at the first
+ * call (first) the Jacobi scaling from them; then the Jacobians' columns scaled. The
+ * unscaled gradient's largest entry into *gmax. False when a point is behind a camera.
+ */
+static bool linearize(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
+		      const struct mvod_ba_options *op, bool first, double *gmax)
+{
+	if (first) {
+		memset(b->sc_pose, 0, sizeof(double) * 6 * (size_t)p->n_poses);
+		memset(b->sc_pt, 0, sizeof(double) * 3 * (size_t)p->n_points);
+	}
+	memset(b->gc, 0, sizeof(double) * 6 * (size_t)p->n_poses);
+	memset(b->gx, 0, sizeof(double) * 3 * (size_t)p->n_points);
+	rotations(b, p->poses, p->n_poses, true);
+	for (int i = 0; i < p->n_obs; i++)
+		if (!p->outlier[i] && !linearize_obs(b, p, op, first, i))
+			return false;
+	*gmax = scale_columns(b, p, first);
 	return true;
 }
 
@@ -412,20 +429,16 @@ static bool chol_solve(double *A, int n, int ld, double *y)
 }
 
 /*
- * The damped step (J^T J + D^2 / mu) y = -J^T r by the Schur complement on the points, in
- * scaled coordinates (b->yc by pose index, b->yx), with the model's cost change. The
- * undamped diagonals are this linearization's, as Ceres's across refused steps. False when
- * a system is not positive definite.
+ * The reduced camera system's start: S (nc x nc, leading dimension ld) holds the free poses'
+ * blocks U = sum Jp^T Jp (upper triangle), damped by their diagonal D^2 / mu; rhs = -g_c.
  */
-static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int nf, double mu,
-		    double *model_change)
+static void camera_blocks(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int nf,
+			  double mu, double *rhs)
 {
 	const int nc = 6 * nf, ld = 6 * b->pose_cap;
 	for (int i = 0; i < nc; i++)
 		memset(b->S + (size_t)ld * i, 0, sizeof(double) * (size_t)nc);
-	double rhs[6 * LM_POSE_CAP];
 	memset(rhs, 0, sizeof(double) * (size_t)nc);
-	/* U = sum Jp^T Jp on the free poses; rhs_c = -g_c */
 	for (int i = 0; i < p->n_obs; i++) {
 		if (p->outlier[i])
 			continue;
@@ -448,79 +461,82 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 			rhs[6 * f + c] = -b->gc[6 * k + c];
 		}
 	}
-	/* each point: V = sum Jx^T Jx + D^2, eliminated */
-	for (int pt = 0; pt < p->n_points; pt++) {
-		if (!b->pt_used[pt])
+}
+
+/*
+ * Point pt's blocks: V = sum Jx^T Jx + D^2 / mu, inverted into b->V, and W (6x3, columns
+ * contiguous: W[a][6 * k + r] is row r, column k) of each observation of a free pose, whose
+ * column block goes into wf; *nw of them. False when V is not positive definite.
+ */
+static bool point_blocks(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int pt,
+			 double mu, double W[][18], int *wf, int *nw)
+{
+	double V[9] = {0};
+	*nw = 0;
+	for (int s = b->start[pt]; s < b->start[pt + 1]; s++) {
+		const int i = b->by_point[s];
+		const struct lm_obs *e = &b->o[i];
+		for (int r = 0; r < 3; r++)
+			for (int c = r; c < 3; c++)
+				V[3 * r + c] += e->Jx[r] * e->Jx[c] + e->Jx[3 + r] * e->Jx[3 + c];
+		const int f = b->free_idx[p->obs[i].pose];
+		if (f < 0)
 			continue;
-		/* W[a][6 * k + r]: row r, column k of observation a's 6x3 W (columns contiguous) */
-		double V[9] = {0}, W[LM_POSE_CAP][18];
-		int wf[LM_POSE_CAP], nw = 0;
-		for (int s = b->start[pt]; s < b->start[pt + 1]; s++) {
-			const int i = b->by_point[s];
-			const struct lm_obs *e = &b->o[i];
-			for (int r = 0; r < 3; r++)
-				for (int c = r; c < 3; c++)
-					V[3 * r + c] += e->Jx[r] * e->Jx[c] + e->Jx[3 + r] * e->Jx[3 + c];
-			const int f = b->free_idx[p->obs[i].pose];
-			if (f < 0)
+		wf[*nw] = f;
+		for (int r = 0; r < 6; r++)
+			for (int c = 0; c < 3; c++)
+				W[*nw][6 * c + r] = e->Jp[r] * e->Jx[c] + e->Jp[6 + r] * e->Jx[3 + c];
+		(*nw)++;
+	}
+	for (int c = 0; c < 3; c++)
+		V[4 * c] += clamp_diag(V[4 * c]) / mu;
+	V[3] = V[1];
+	V[6] = V[2];
+	V[7] = V[5];
+	if (!inv3(V))
+		return false;
+	memcpy(b->V + 9 * pt, V, sizeof(V));
+	return true;
+}
+
+/* Point pt eliminated: WV_a = W_a V^-1 (6x3); rhs_a -= WV_a (-g); S_ab -= WV_a W_b^T. */
+static void eliminate(struct mvod_ba_lm *b, int pt, double W[][18], const int *wf, int nw,
+		      double *rhs)
+{
+	const int ld = 6 * b->pose_cap;
+	const double *V = b->V + 9 * pt, *g = b->gx + 3 * pt;
+	for (int a = 0; a < nw; a++) {
+		double *wv = b->WV + 18 * a;
+		for (int r = 0; r < 6; r++)
+			for (int c = 0; c < 3; c++)
+				wv[3 * r + c] = W[a][r] * V[c] + W[a][6 + r] * V[3 + c] +
+						W[a][12 + r] * V[6 + c];
+		for (int r = 0; r < 6; r++)
+			rhs[6 * wf[a] + r] += wv[3 * r] * g[0] + wv[3 * r + 1] * g[1] +
+					      wv[3 * r + 2] * g[2];
+		/*
+		 * The upper triangle of S: a block on its diagonal from c = r, a block above it
+		 * whole. No test in the inner loop, W's columns contiguous: lm_step 453e6 -> 418e6
+		 * instructions over the KITTI 07 clip, the sums the same, term by term and in
+		 * order (BENCHMARKS.md).
+		 */
+		for (int c2 = 0; c2 < nw; c2++) {
+			if (wf[c2] < wf[a])
 				continue;
-			wf[nw] = f;
-			for (int r = 0; r < 6; r++)
-				for (int c = 0; c < 3; c++)
-					W[nw][6 * c + r] =
-						e->Jp[r] * e->Jx[c] + e->Jp[6 + r] * e->Jx[3 + c];
-			nw++;
-		}
-		for (int c = 0; c < 3; c++)
-			V[4 * c] += clamp_diag(V[4 * c]) / mu;
-		V[3] = V[1];
-		V[6] = V[2];
-		V[7] = V[5];
-		if (!inv3(V))
-			return false;
-		memcpy(b->V + 9 * pt, V, sizeof(V));
-		const double *g = b->gx + 3 * pt;
-		/* WV_a = W_a V^-1 (6x3); S_ab -= WV_a W_b^T; rhs_a -= WV_a (-g) */
-		for (int a = 0; a < nw; a++) {
-			double *wv = b->WV + 18 * a;
-			for (int r = 0; r < 6; r++)
-				for (int c = 0; c < 3; c++)
-					wv[3 * r + c] = W[a][r] * V[c] + W[a][6 + r] * V[3 + c] +
-							W[a][12 + r] * V[6 + c];
-			for (int r = 0; r < 6; r++)
-				rhs[6 * wf[a] + r] += wv[3 * r] * g[0] + wv[3 * r + 1] * g[1] +
-						      wv[3 * r + 2] * g[2];
-			/*
-			 * The upper triangle of S: a block on its diagonal from c = r, a block above it
-			 * whole. No test in the inner loop, W's columns contiguous: lm_step 453e6 -> 418e6
-			 * instructions over the KITTI 07 clip, the sums the same, term by term and in
-			 * order (BENCHMARKS.md, "The twelfth session").
-			 */
-			for (int c2 = 0; c2 < nw; c2++) {
-				if (wf[c2] < wf[a])
-					continue;
-				double *B = b->S + (size_t)ld * 6 * wf[a] + 6 * wf[c2];
-				const double *w = W[c2];
-				for (int r = 0; r < 6; r++) {
-					const double x = wv[3 * r], y = wv[3 * r + 1], z = wv[3 * r + 2];
-					for (int c = wf[c2] == wf[a] ? r : 0; c < 6; c++)
-						B[ld * r + c] -= x * w[c] + y * w[6 + c] + z * w[12 + c];
-				}
+			double *B = b->S + (size_t)ld * 6 * wf[a] + 6 * wf[c2];
+			const double *w = W[c2];
+			for (int r = 0; r < 6; r++) {
+				const double x = wv[3 * r], y = wv[3 * r + 1], z = wv[3 * r + 2];
+				for (int c = wf[c2] == wf[a] ? r : 0; c < 6; c++)
+					B[ld * r + c] -= x * w[c] + y * w[6 + c] + z * w[12 + c];
 			}
 		}
 	}
-	/* symmetric: the upper triangle is filled, copy it down */
-	for (int r = 0; r < nc; r++)
-		for (int c = 0; c < r; c++)
-			b->S[(size_t)ld * r + c] = b->S[(size_t)ld * c + r];
-	if (nc > 0 && !chol_solve(b->S, nc, ld, rhs))
-		return false;
-	for (int k = 0; k < p->n_poses; k++) {
-		const int f = b->free_idx[k];
-		for (int c = 0; c < 6; c++)
-			b->yc[6 * k + c] = f < 0 ? 0.0 : rhs[6 * f + c];
-	}
-	/* back-substitution: y_x = V^-1 (-g_x - sum W^T y_c) */
+}
+
+/* The points' step from the cameras': y_x = V^-1 (-g_x - sum W^T y_c), W^T y = Jx^T (Jp y). */
+static void back_substitute(struct mvod_ba_lm *b, const struct mvod_ba_problem *p)
+{
 	for (int pt = 0; pt < p->n_points; pt++) {
 		if (!b->pt_used[pt])
 			continue;
@@ -531,7 +547,6 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 			if (b->free_idx[k] < 0)
 				continue;
 			const struct lm_obs *e = &b->o[i];
-			/* W^T y = Jx^T (Jp y) */
 			double jy[2] = {0, 0};
 			for (int c = 0; c < 6; c++) {
 				jy[0] += e->Jp[c] * b->yc[6 * k + c];
@@ -544,7 +559,11 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 		for (int c = 0; c < 3; c++)
 			b->yx[3 * pt + c] = Vi[3 * c] * t[0] + Vi[3 * c + 1] * t[1] + Vi[3 * c + 2] * t[2];
 	}
-	/* model cost change -(m . (r + m / 2)), m = J y */
+}
+
+/* The model's cost change for the step: -(m . (r + m / 2)), m = J y. */
+static double model_change(const struct mvod_ba_lm *b, const struct mvod_ba_problem *p)
+{
 	double mc = 0;
 	for (int i = 0; i < p->n_obs; i++) {
 		if (p->outlier[i])
@@ -563,7 +582,43 @@ static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int n
 		}
 		mc -= m[0] * (e->r[0] + 0.5 * m[0]) + m[1] * (e->r[1] + 0.5 * m[1]);
 	}
-	*model_change = mc;
+	return mc;
+}
+
+/*
+ * The damped step (J^T J + D^2 / mu) y = -J^T r by the Schur complement on the points, in
+ * scaled coordinates (b->yc by pose index, b->yx), with the model's cost change. The
+ * undamped diagonals are this linearization's, as Ceres's across refused steps. False when
+ * a system is not positive definite.
+ */
+static bool lm_step(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int nf, double mu,
+		    double *model)
+{
+	const int nc = 6 * nf, ld = 6 * b->pose_cap;
+	double rhs[6 * LM_POSE_CAP];
+	camera_blocks(b, p, nf, mu, rhs);
+	for (int pt = 0; pt < p->n_points; pt++) {
+		double W[LM_POSE_CAP][18];
+		int wf[LM_POSE_CAP], nw;
+		if (!b->pt_used[pt])
+			continue;
+		if (!point_blocks(b, p, pt, mu, W, wf, &nw))
+			return false;
+		eliminate(b, pt, W, wf, nw, rhs);
+	}
+	/* symmetric: the upper triangle is filled, copy it down */
+	for (int r = 0; r < nc; r++)
+		for (int c = 0; c < r; c++)
+			b->S[(size_t)ld * r + c] = b->S[(size_t)ld * c + r];
+	if (nc > 0 && !chol_solve(b->S, nc, ld, rhs))
+		return false;
+	for (int k = 0; k < p->n_poses; k++) {
+		const int f = b->free_idx[k];
+		for (int c = 0; c < 6; c++)
+			b->yc[6 * k + c] = f < 0 ? 0.0 : rhs[6 * f + c];
+	}
+	back_substitute(b, p);
+	*model = model_change(b, p);
 	return true;
 }
 
@@ -613,19 +668,19 @@ static void candidate(int dim, const double *x, const double *y, const double *s
 	}
 }
 
-int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
-		     const struct mvod_ba_options *op, struct mvod_ba_result *res)
+/*
+ * The observations behind their camera leave (flagged); the rest are grouped by point
+ * (b->start, b->by_point), their points used and their poses observed; the free poses (observed,
+ * not held) numbered into b->free_idx (-1: none). Returns how many are free, or -EINVAL when a
+ * point has more observations than lm_step's blocks hold. *n_active: the observations kept.
+ */
+static int group(struct mvod_ba_lm *b, const struct mvod_ba_problem *p, int *n_active)
 {
-	memset(res, 0, sizeof(*res));
-	if (!valid(b, p) || !(op->huber > 0) || op->max_iterations < 1 ||
-	    !(op->function_tolerance >= 0))
-		return -EINVAL;
-	/* observations behind their camera leave; the rest grouped by point */
 	memset(b->start, 0, sizeof(int) * ((size_t)p->n_points + 1));
 	memset(b->pt_used, 0, (size_t)p->n_points);
 	for (int k = 0; k < p->n_poses; k++)
 		b->free_idx[k] = -1;
-	int n_active = 0;
+	*n_active = 0;
 	rotations(b, p->poses, p->n_poses, false);
 	for (int i = 0; i < p->n_obs; i++) {
 		const struct mvod_ba_obs *o = &p->obs[i];
@@ -634,7 +689,7 @@ int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
 					  p->points + 3 * o->point, r, NULL, NULL);
 		if (p->outlier[i])
 			continue;
-		n_active++;
+		(*n_active)++;
 		b->start[o->point + 1]++;
 		b->pt_used[o->point] = 1;
 		b->free_idx[o->pose] = -2; /* observed */
@@ -654,81 +709,118 @@ int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
 			b->by_point[--b->start[p->obs[i].point + 1]] = i;
 	for (int pt = 0; pt < p->n_points; pt++)
 		b->start[pt] = b->start[pt + 1];
-	b->start[p->n_points] = n_active;
+	b->start[p->n_points] = *n_active;
+	return nf;
+}
+
+/*
+ * The candidate x + y (unscaled) of the step just solved into b->cand_*, the blocks it does
+ * not move copied; true when the step is too small against the parameters to go on (Ceres's
+ * parameter tolerance).
+ */
+static bool make_candidate(struct mvod_ba_lm *b, const struct mvod_ba_problem *p)
+{
+	double dn = 0, xn = 0;
+	for (int k = 0; k < p->n_poses; k++)
+		if (b->free_idx[k] >= 0)
+			candidate(6, p->poses + 6 * k, b->yc + 6 * k, b->sc_pose + 6 * k,
+				  b->cand_poses + 6 * k, &dn, &xn);
+	for (int pt = 0; pt < p->n_points; pt++)
+		if (b->pt_used[pt])
+			candidate(3, p->points + 3 * pt, b->yx + 3 * pt, b->sc_pt + 3 * pt,
+				  b->cand_pts + 3 * pt, &dn, &xn);
+	if (sqrt(dn) <= LM_PARAMETER_TOLERANCE * (sqrt(xn) + LM_PARAMETER_TOLERANCE))
+		return true;
+	for (int k = 0; k < p->n_poses; k++)
+		if (b->free_idx[k] < 0)
+			memcpy(b->cand_poses + 6 * k, p->poses + 6 * k, 6 * sizeof(double));
+	for (int pt = 0; pt < p->n_points; pt++)
+		if (!b->pt_used[pt])
+			memcpy(b->cand_pts + 3 * pt, p->points + 3 * pt, 3 * sizeof(double));
+	return false;
+}
+
+/* The candidate becomes the problem's state. */
+static void take_candidate(struct mvod_ba_lm *b, const struct mvod_ba_problem *p)
+{
+	for (int k = 0; k < p->n_poses; k++)
+		if (b->free_idx[k] >= 0)
+			memcpy(p->poses + 6 * k, b->cand_poses + 6 * k, 6 * sizeof(double));
+	for (int pt = 0; pt < p->n_points; pt++)
+		if (b->pt_used[pt])
+			memcpy(p->points + 3 * pt, b->cand_pts + 3 * pt, 3 * sizeof(double));
+}
+
+/*
+ * Levenberg-Marquardt from the problem's state (cost, linearised, gmax its gradient's largest
+ * entry): steps taken while they decrease the cost as their model says, the radius mu grown
+ * after each, shrunk after each refusal. 0, or -EIO.
+ */
+static int iterate(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
+		   const struct mvod_ba_options *op, int nf, double cost, double gmax,
+		   struct mvod_ba_result *res)
+{
 	const double ftol = op->function_tolerance > 0 ? op->function_tolerance
 						       : LM_FUNCTION_TOLERANCE;
+	double mu = LM_RADIUS0, decrease = 2.0, model;
+	int it = 0;
+	bool converged = gmax <= LM_GRADIENT_TOLERANCE;
+	while (!converged && it < op->max_iterations && mu >= LM_MIN_RADIUS) {
+		it++;
+		if (lm_step(b, p, nf, mu, &model) && model > 0) {
+			double cand = 0, change = 0;
+			bool small = make_candidate(b, p);
+			if (!small) {
+				cand = cost_at(b, p, op, b->cand_poses, b->cand_pts);
+				change = cost - cand;
+				small = fabs(change) <= ftol * cost;
+			}
+			if (small) {
+				converged = true;
+				it--; /* Ceres does not count the iteration that stops */
+				break;
+			}
+			const double rho = change / model;
+			if (rho > LM_MIN_RELATIVE_DECREASE) {
+				take_candidate(b, p);
+				cost = cand;
+				const double t = 2.0 * rho - 1.0;
+				mu = fmin(LM_MAX_RADIUS, mu / fmax(1.0 / 3.0, 1.0 - t * t * t));
+				decrease = 2.0;
+				if (!linearize(b, p, op, false, &gmax))
+					return -EIO;
+				converged = gmax <= LM_GRADIENT_TOLERANCE;
+				continue;
+			}
+		}
+		mu /= decrease;
+		decrease *= 2.0;
+	}
+	res->final_cost = cost;
+	res->iterations = it;
+	res->converged = converged;
+	return 0;
+}
+
+int mvod_ba_lm_solve(struct mvod_ba_lm *b, const struct mvod_ba_problem *p,
+		     const struct mvod_ba_options *op, struct mvod_ba_result *res)
+{
+	memset(res, 0, sizeof(*res));
+	if (!valid(b, p) || !(op->huber > 0) || op->max_iterations < 1 ||
+	    !(op->function_tolerance >= 0))
+		return -EINVAL;
+	int n_active, nf = group(b, p, &n_active);
+	if (nf < 0)
+		return nf;
 	if (n_active > 0) {
 		double cost = cost_at(b, p, op, p->poses, p->points), gmax;
 		res->initial_cost = cost;
 		bool ok = linearize(b, p, op, true, &gmax);
 		if (!ok || cost == DBL_MAX)
 			return -EIO;
-		double mu = LM_RADIUS0, decrease = 2.0;
-		int it = 0;
-		bool converged = gmax <= LM_GRADIENT_TOLERANCE;
-		while (!converged && it < op->max_iterations && mu >= LM_MIN_RADIUS) {
-			it++;
-			double model;
-			bool valid_step = lm_step(b, p, nf, mu, &model) && model > 0;
-			if (valid_step) {
-				/* unscaled step, its norm against the parameters' */
-				double dn = 0, xn = 0;
-				for (int k = 0; k < p->n_poses; k++)
-					if (b->free_idx[k] >= 0)
-						candidate(6, p->poses + 6 * k, b->yc + 6 * k,
-							  b->sc_pose + 6 * k, b->cand_poses + 6 * k, &dn,
-							  &xn);
-				for (int pt = 0; pt < p->n_points; pt++)
-					if (b->pt_used[pt])
-						candidate(3, p->points + 3 * pt, b->yx + 3 * pt,
-							  b->sc_pt + 3 * pt, b->cand_pts + 3 * pt, &dn,
-							  &xn);
-				if (sqrt(dn) <= LM_PARAMETER_TOLERANCE * (sqrt(xn) + LM_PARAMETER_TOLERANCE)) {
-					converged = true;
-					it--; /* Ceres does not count the iteration that stops */
-					break;
-				}
-				for (int k = 0; k < p->n_poses; k++)
-					if (b->free_idx[k] < 0)
-						memcpy(b->cand_poses + 6 * k, p->poses + 6 * k,
-						       6 * sizeof(double));
-				for (int pt = 0; pt < p->n_points; pt++)
-					if (!b->pt_used[pt])
-						memcpy(b->cand_pts + 3 * pt, p->points + 3 * pt,
-						       3 * sizeof(double));
-				const double cand = cost_at(b, p, op, b->cand_poses, b->cand_pts);
-				const double change = cost - cand;
-				if (fabs(change) <= ftol * cost) {
-					converged = true;
-					it--;
-					break;
-				}
-				const double rho = change / model;
-				if (rho > LM_MIN_RELATIVE_DECREASE) {
-					for (int k = 0; k < p->n_poses; k++)
-						if (b->free_idx[k] >= 0)
-							memcpy(p->poses + 6 * k, b->cand_poses + 6 * k,
-							       6 * sizeof(double));
-					for (int pt = 0; pt < p->n_points; pt++)
-						if (b->pt_used[pt])
-							memcpy(p->points + 3 * pt, b->cand_pts + 3 * pt,
-							       3 * sizeof(double));
-					cost = cand;
-					const double t = 2.0 * rho - 1.0;
-					mu = fmin(LM_MAX_RADIUS, mu / fmax(1.0 / 3.0, 1.0 - t * t * t));
-					decrease = 2.0;
-					if (!linearize(b, p, op, false, &gmax))
-						return -EIO;
-					converged = gmax <= LM_GRADIENT_TOLERANCE;
-					continue;
-				}
-			}
-			mu /= decrease;
-			decrease *= 2.0;
-		}
-		res->final_cost = cost;
-		res->iterations = it;
-		res->converged = converged;
+		int ret = iterate(b, p, op, nf, cost, gmax, res);
+		if (ret)
+			return ret;
 	}
 	flag_outliers(b, p, op->chi2_outlier, &res->n_outliers);
 	return 0;
