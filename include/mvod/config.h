@@ -114,12 +114,6 @@ int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t 
  * than ORB (its map keeps ORB descriptors).
  */
 int mvod_config_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen);
-/*
- * Whether frames of cam's size, scaled by params->resize, are large enough for the VO:
- * -EINVAL with the reason in err when not.
- */
-int mvod_config_check_frames(const struct mvod_vo_params *params, const struct mvod_camera *cam,
-			     char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,6 @@
 /*
- * The checks of the VO's options against one another and against the frames, which the option
- * table's one-key checks (config.c) cannot make; their messages name the flags.
+ * The checks of the VO's options against one another, which the option table's one-key checks
+ * (config.c) cannot make; their messages name the flags.
  */
 #include "mvod/config.h"
 
@@ -31,21 +31,3 @@ int mvod_config_check_frontend(const struct mvod_vo_params *p, char *err, size_t
 	return mvod_errf(err, errlen, -EINVAL, "--tracks is an option of the KLT front end and "
 			 "--%s one of the descriptor front end: drop one of them", opt);
 }
-
-int mvod_config_check_frames(const struct mvod_vo_params *params, const struct mvod_camera *cam,
-			      char *err, size_t errlen)
-{
-	/* As mvod_cv_preproc_create rounds. */
-	int w = (int)(cam->width * params->resize + 0.5), h = (int)(cam->height * params->resize + 0.5);
-	if (w >= MVOD_VO_MIN_PX && h >= MVOD_VO_MIN_PX)
-		return 0;
-	if (params->resize < 1)
-		return mvod_errf(err, errlen, -EINVAL, "frames of %dx%d are %dx%d after --resize %g, "
-				 "smaller than the %dx%d pixels the feature detector needs: raise "
-				 "--resize", cam->width, cam->height, w, h, params->resize,
-				 MVOD_VO_MIN_PX, MVOD_VO_MIN_PX);
-	return mvod_errf(err, errlen, -EINVAL, "frames of %dx%d are smaller than the %dx%d pixels "
-			 "the feature detector needs", cam->width, cam->height, MVOD_VO_MIN_PX,
-			 MVOD_VO_MIN_PX);
-}
-

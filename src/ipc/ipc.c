@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "ipc/lcm_log.h"
-#include "mvod/pipeline.h"
+#include "mvod/status.h"
 #include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
 #include "mvod_status2_t.h"

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "mvod/log.h"
-#include "mvod/pipeline.h"
+#include "mvod/status.h"
 
 /* Points kept for the plot and the ATE; longer runs are decimated, never grown. */
 #define PATH_POINTS 20000

@@ -1,7 +1,7 @@
 /* The systemd sink (Type=notify): readiness, watchdog, a status line, stopping. Stateless. */
 #include "mvod/sink.h"
 
-#include "mvod/pipeline.h"
+#include "mvod/status.h"
 #include "util/notify.h"
 
 static int notify_frame(void *ctx, const struct mvod_frame_out *f)

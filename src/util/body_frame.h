@@ -10,7 +10,7 @@
 #include <stddef.h>
 
 #include "mvod/geom.h"
-#include "mvod/pipeline.h"
+#include "mvod/status.h"
 
 struct mvod_body_frame {
 	bool body;              /* false: camera poses go out as they are */
