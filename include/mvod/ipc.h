@@ -88,6 +88,32 @@ struct _mvod_status_t;
 void mvod_pose_msg_upgrade(const struct _mvod_pose_t *v1, struct _mvod_pose2_t *v2);
 void mvod_status_msg_upgrade(const struct _mvod_status_t *v1, struct _mvod_status2_t *v2);
 
+/* Reading LCM logs (mvod view, --speed-url file://): file:// URLs, a bounded check first. */
+/*
+ * A file://PATH[?options] URL: PATH into path and LCM's mode option into *mode: 'r' (also
+ * when absent), 'w', 'a', or '?' for any other value. 0 when it is one; -ENOENT for any
+ * other URL (NULL too), -EINVAL for an empty PATH, -ENAMETOOLONG when PATH does not fit.
+ */
+int mvod_lcm_file_url(const char *url, char *path, size_t len, char *mode);
+
+struct mvod_lcmlog_check {
+	int64_t events;   /* whole events before bad_offset (all of them when sound) */
+	int64_t size;     /* bytes in the file */
+	int64_t bad_offset; /* where the first bad event starts; -1 when the log is sound */
+	bool cut;         /* the bad event is the last and only cut short (a writer stopped
+			     mid-event): LCM reads up to it and stops, safely */
+	char why[160];    /* what is wrong at bad_offset, one line */
+};
+
+/*
+ * What every reader of a log (mvod view, --speed-url file://) does before LCM reads it:
+ * checks the log at path. 0 when LCM can read it safely: sound, or only cut short at its end
+ * (out->cut; the caller may warn). Else a one-line reason naming path in err and -EIO when it
+ * is corrupt (where, and the truncate that keeps the intact events), -ENODATA when it holds
+ * no whole event, -errno when it cannot be read.
+ */
+int mvod_lcmlog_vet(const char *path, struct mvod_lcmlog_check *out, char *err, size_t errlen);
+
 #ifdef __cplusplus
 }
 #endif

@@ -22,6 +22,8 @@ static inline bool mvod_calib_mount_ok(double height_m, double pitch_deg, double
 extern "C" {
 #endif
 
+/* Whether fx, fy, cx, cy are finite and fx, fy > 0. */
+bool mvod_calib_intrinsics_ok(const struct mvod_camera *c);
 /*
  * Takes fx, fy, cx, cy from a row-major K, which must be [fx 0 cx; 0 fy cy; 0 0 1] with finite
  * entries and fx, fy > 0 (skew is not modelled). Returns 0 or -EINVAL; cam is untouched then.

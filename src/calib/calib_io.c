@@ -17,38 +17,6 @@
 /* Calibration files are small; anything bigger is not one. */
 #define CALIB_MAX_BYTES (4 * 1024 * 1024)
 
-static const char *const model_names[] = {"pinhole-radtan", "fisheye-kb4"};
-
-const char *mvod_cam_model_name(enum mvod_cam_model model)
-{
-	return (unsigned)model < 2 ? model_names[model] : "unknown";
-}
-
-int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out)
-{
-	for (int i = 0; i < 2; i++) {
-		if (strcmp(name, model_names[i]) == 0) {
-			*out = (enum mvod_cam_model)i;
-			return 0;
-		}
-	}
-	return -EINVAL;
-}
-
-bool mvod_camera_has_distortion(const struct mvod_camera *cam)
-{
-	for (int i = 0; i < cam->n_dist; i++)
-		if (cam->dist[i] != 0.0)
-			return true;
-	return false;
-}
-
-static bool valid_intrinsics(const struct mvod_camera *c)
-{
-	return isfinite(c->fx) && isfinite(c->fy) && isfinite(c->cx) && isfinite(c->cy) && c->fx > 0 &&
-	       c->fy > 0;
-}
-
 static int json_number_array(const cJSON *arr, double *dst, int min, int max, int *count)
 {
 	if (!cJSON_IsArray(arr))
@@ -79,38 +47,6 @@ static int json_K(const cJSON *K, struct mvod_camera *cam)
 				return -EINVAL;
 	}
 	return mvod_calib_set_K(k, cam);
-}
-
-void mvod_camera_K(const struct mvod_camera *cam, double K[9])
-{
-	const double k[9] = {cam->fx, 0, cam->cx, 0, cam->fy, cam->cy, 0, 0, 1};
-	memcpy(K, k, sizeof(k));
-}
-
-int mvod_calib_set_K(const double k[9], struct mvod_camera *cam)
-{
-	struct mvod_camera c = *cam;
-	c.fx = k[0];
-	c.fy = k[4];
-	c.cx = k[2];
-	c.cy = k[5];
-	/* Skew (k[1]) is not modelled. */
-	if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1 || !valid_intrinsics(&c))
-		return -EINVAL;
-	*cam = c;
-	return 0;
-}
-
-bool mvod_calib_dist_count_ok(enum mvod_cam_model model, int n)
-{
-	if (model == MVOD_CAM_FISHEYE_KB4)
-		return n == 4;
-	return n == 0 || n == 4 || n == 5 || n == 8 || n == 12 || n == 14;
-}
-
-const char *mvod_calib_dist_counts(enum mvod_cam_model model)
-{
-	return model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14";
 }
 
 static cJSON *json_parse(const char *text, char *err, size_t errlen)
@@ -171,7 +107,7 @@ static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, si
 	}
 	c.width = (int)size[0];
 	c.height = (int)size[1];
-	if (json_K(cJSON_GetObjectItemCaseSensitive(root, "K"), &c) != 0 || !valid_intrinsics(&c)) {
+	if (json_K(cJSON_GetObjectItemCaseSensitive(root, "K"), &c) != 0 || !mvod_calib_intrinsics_ok(&c)) {
 		ret = mvod_errf(err, errlen, -EINVAL,
 			   "\"K\" must be [[fx,0,cx],[0,fy,cy],[0,0,1]] with fx, fy > 0");
 		goto out;
@@ -299,7 +235,7 @@ static int parse_kitti(const char *text, struct mvod_camera *cam)
 			}
 			*cam = (struct mvod_camera){.fx = p[0], .cx = p[2], .fy = p[5], .cy = p[6],
 						    .model = MVOD_CAM_PINHOLE_RADTAN};
-			return valid_intrinsics(cam) ? 0 : -EINVAL;
+			return mvod_calib_intrinsics_ok(cam) ? 0 : -EINVAL;
 		}
 		line = strchr(line, '\n');
 		if (line)

@@ -17,8 +17,6 @@
 #include "mvod/ipc.h"
 #include "mvod/log.h"
 #include "mvod/view.h"
-#include "ipc/lcm_log.h"
-#include "ipc/log_check.h"
 #include "mvod_pose2_t.h"
 #include "mvod_pose_t.h"
 #include "mvod_status2_t.h"

@@ -8,17 +8,13 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "mvod/ipc.h"
+
 /* Bytes before the channel name in every event: sync, number, time, two lengths. */
 #define MVOD_LCM_LOG_HEADER 28
 
 struct mvod_lcm_log;
 
-/*
- * A file://PATH[?options] URL: PATH into path and LCM's mode option into *mode: 'r' (also
- * when absent), 'w', 'a', or '?' for any other value. 0 when it is one; -ENOENT for any
- * other URL (NULL too), -EINVAL for an empty PATH, -ENAMETOOLONG when PATH does not fit.
- */
-int mvod_lcm_file_url(const char *url, char *path, size_t len, char *mode);
 /*
  * Opens path through the output policy (util/output.h: locked, truncated only at the first
  * event); what names it in messages. max_event: the largest channel name plus message, in

@@ -1,4 +1,5 @@
 #include "util/linalg.h"
+#include "util/svd_shim.h"
 
 #include "mvod/geom.h"
 

@@ -1,6 +1,6 @@
 /*
  * Small dense helpers shared by the VO (motion), evaluation (Umeyama) and tests: a median and
- * the 3x3 SVD with the rotation nearest to a correlation matrix. Matrices are 3x3 row-major.
+ * the rotation nearest to a correlation matrix (svd_shim.h's SVD). Matrices are 3x3 row-major.
  */
 #ifndef MVOD_UTIL_LINALG_H
 #define MVOD_UTIL_LINALG_H
@@ -11,9 +11,6 @@ extern "C" {
 
 /* Median of v[0..n) (reorders v); n > 0. */
 double mvod_median(double *v, int n);
-
-/* A = U diag(S) Vt, S descending (OpenCV's SVD, in linalg_shim.cpp). 0 or -errno. */
-int mvod_svd3(const double A[9], double U[9], double S[3], double Vt[9]);
 
 /*
  * The rotation R maximising trace(R^T C) for a correlation C = sum dst src^T (Kabsch and

@@ -7,6 +7,7 @@
 
 #include "mvod/geom.h"
 #include "util/linalg.h"
+#include "util/svd_shim.h"
 
 /*
  * A point is on the ground when within this fraction of the camera's height of it along the

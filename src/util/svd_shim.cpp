@@ -1,4 +1,4 @@
-#include "util/linalg.h"
+#include "svd_shim.h"
 
 #include <opencv2/core.hpp>
 
