@@ -30,6 +30,7 @@ static const bool ba_ceres_present = false;
 static inline int ba_ceres_solve(const struct mvod_ba_problem *p,
 				 const struct mvod_ba_options *o, struct mvod_ba_result *r)
 {
+	*r = (struct mvod_ba_result){0};
 	return -ENOTSUP;
 }
 #endif
