@@ -12,6 +12,7 @@
 #include "calib/calib_internal.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
+#include "util/input.h"
 #include "util/read_file.h"
 
 /* Calibration files are small; anything bigger is not one. */
@@ -323,7 +324,8 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 		     char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", &text, NULL, err, errlen);
+	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", MVOD_INPUT_STREAM, &text,
+				 NULL, err, errlen);
 	if (ret)
 		return ret;
 	/* A UTF-8 byte order mark (Windows editors write one) is no part of the text. */

@@ -4,7 +4,7 @@
  * relative to the first of them, so in mvod's world (the first camera frame, OpenCV axes).
  */
 #include "capture/dataset.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 #include <errno.h>
 #include <math.h>
@@ -150,7 +150,7 @@ int mvod_ds_ground_truth(void *priv, struct mvod_traj *gt, char *from, size_t fr
 	snprintf(from, fromlen, "%s", ds->gt_path);
 	*gt = (struct mvod_traj){.format = MVOD_TRAJ_TUM};
 	struct samples g = {.ds = ds};
-	int ret = mvod_read_lines(ds->gt_path, add_line, &g, err, errlen);
+	int ret = mvod_lines_each(ds->gt_path, "ground truth", add_line, &g, err, errlen);
 	if (ret == 0 && g.n == 0)
 		ret = mvod_errf(err, errlen, -ENODATA, "%s holds no poses", ds->gt_path);
 	if (ret == 0 && resample(&g, ds, gt) < 0)

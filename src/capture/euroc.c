@@ -15,7 +15,7 @@
 #include "capture/dataset.h"
 #include "capture/euroc.h"
 #include "capture/uri.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 static bool is_dir(const char *path)
 {
@@ -103,7 +103,7 @@ static int euroc_open(void *priv, const char *location, char *err, size_t errlen
 	if (!ret)
 		ret = mvod_euroc_sensor_load(sensor, &ds->cam, &ds->body_cam, err, errlen);
 	if (!ret)
-		ret = mvod_read_lines(ds->index, add_frame, &x, err, errlen);
+		ret = mvod_lines_each(ds->index, "EuRoC data.csv", add_frame, &x, err, errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;

@@ -194,7 +194,7 @@ int mvod_euroc_sensor_load(const char *path, struct mvod_camera *cam, struct mvo
 			   char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_read_file(path, SENSOR_MAX_BYTES, "EuRoC sensor file", &text, NULL, err,
+	int ret = mvod_read_file(path, SENSOR_MAX_BYTES, "EuRoC sensor file", 0, &text, NULL, err,
 				 errlen);
 	if (ret)
 		return ret;

@@ -16,7 +16,7 @@
 
 #include "mvod/log.h"
 #include "util/output.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
@@ -198,7 +198,7 @@ static int load_times(struct mvod_images *im, const char *path, char *err, size_
 	if (!im->times_us)
 		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", path);
 	struct times x = {path, im->times_us, im->n, 0};
-	int ret = mvod_read_lines(path, time_line, &x, err, errlen);
+	int ret = mvod_lines_each(path, "times.txt", time_line, &x, err, errlen);
 	if (!ret && x.k < x.n)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s has %zu timestamps for %zu images; it "
 				"needs one line per image", path, x.k, x.n);

@@ -19,6 +19,7 @@
 
 #include "capture/dataset.h"
 #include "mvod/log.h"
+#include "util/lines.h"
 #include "util/read_file.h"
 
 struct tum {
@@ -98,7 +99,7 @@ static int open_rgbd(struct tum *t, char *err, size_t errlen)
 	int ret = mvod_ds_optional(ds->gt_path, sizeof(ds->gt_path), t->dir, "groundtruth.txt",
 				   err, errlen);
 	if (!ret)
-		ret = mvod_read_lines(ds->index, add_rgb, &x, err, errlen);
+		ret = mvod_lines_each(ds->index, "TUM rgb.txt", add_rgb, &x, err, errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;
@@ -198,7 +199,8 @@ static int open_mono(struct tum *t, char *err, size_t errlen)
 	char path[PATH_MAX], *text = NULL;
 	int ret = mvod_capture_path(path, sizeof(path), t->dir, "camera.txt", err, errlen);
 	if (!ret)
-		ret = mvod_read_lines(ds->index, add_mono, &x, err, errlen);
+		ret = mvod_lines_each(ds->index, "TUM monoVO times.txt", add_mono, &x, err,
+				      errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;
@@ -208,7 +210,7 @@ static int open_mono(struct tum *t, char *err, size_t errlen)
 	 * the camera. Why it was not taken is said when the run asks for one.
 	 */
 	/* A camera.txt is 4 short lines; 64 KiB is far past any. */
-	ret = mvod_read_file(path, 65536, "TUM monoVO camera.txt", &text, NULL, t->why,
+	ret = mvod_read_file(path, 65536, "TUM monoVO camera.txt", 0, &text, NULL, t->why,
 			     sizeof(t->why));
 	if (!ret)
 		ret = parse_camera(text, path, &ds->cam, t->why, sizeof(t->why));

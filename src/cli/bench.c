@@ -20,6 +20,8 @@
 #include "mvod/pipeline.h"
 #include "mvod/plot.h"
 #include "util/atomic_file.h"
+#include "util/errbuf.h"
+#include "util/lines.h"
 #include "util/output.h"
 
 /*
@@ -828,23 +830,29 @@ static int run_child(char **argv)
 	return WIFEXITED(st) && WEXITSTATUS(st) == 0 ? 0 : -ECHILD;
 }
 
-/* The data line of a one-row CSV the child wrote, split into cells. */
+/* The data line (the second) of a one-row CSV the child wrote, split into cells: 1 when whole. */
+static int split_row(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
+{
+	struct row *r = ctx;
+	if (lineno < 2)
+		return 0;
+	int c = 0;
+	for (char *save, *t = strtok_r(line, ",", &save); t && c < NCOLS;
+	     t = strtok_r(NULL, ",", &save))
+		snprintf(r->f[c++], sizeof(r->f[0]), "%s", t);
+	return c == NCOLS ? 1 : mvod_errf(err, errlen, -EINVAL, "line %zu: %d cells, not %d", lineno,
+					  c, NCOLS);
+}
+
 static int read_row(const char *path, struct row *r)
 {
-	char line[4096];
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return -errno;
-	int ret = -EINVAL;
-	if (fgets(line, sizeof(line), f) && fgets(line, sizeof(line), f)) {
-		line[strcspn(line, "\n")] = '\0';
-		int c = 0;
-		for (char *save, *t = strtok_r(line, ",", &save); t && c < NCOLS;
-		     t = strtok_r(NULL, ",", &save))
-			snprintf(r->f[c++], sizeof(r->f[0]), "%s", t);
-		ret = c == NCOLS ? 0 : -EINVAL;
-	}
-	fclose(f);
+	char err[1024] = "";
+	r->f[NCOLS - 1][0] = '\0';
+	int ret = mvod_lines_each(path, "mvod bench CSV", split_row, r, err, sizeof(err));
+	if (!ret && !r->f[NCOLS - 1][0])
+		ret = mvod_errf(err, sizeof(err), -EINVAL, "%s holds no row", path);
+	if (ret)
+		LOG(ERROR, "%s", err);
 	return ret;
 }
 

@@ -10,7 +10,7 @@
 
 #include "util/errbuf.h"
 #include "util/output.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 const char *const mvod_traj_format_names[] = {"tum", "kitti", NULL};
 
@@ -215,9 +215,9 @@ static int load_line(void *ctx, char *line, size_t lineno, char *err, size_t err
 
 int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen)
 {
-	/* Ground truth is an input: mvod_read_lines notes it, so no output of this run may be it. */
+	/* Ground truth is an input: the line reader notes it, so no output of this run may be it. */
 	struct loader l = {.path = path};
-	int ret = mvod_read_lines(path, load_line, &l, err, errlen);
+	int ret = mvod_lines_each(path, "trajectory", load_line, &l, err, errlen);
 	if (!ret && l.tr.n == 0)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s: no poses (an empty file, or only comments)",
 				path);

@@ -140,7 +140,7 @@ static void test_gt_is_a_folder(void **state)
 	(void)state;
 	struct run_result r;
 	run_with_gt(seq, &r);
-	if (r.status != 1 || !strstr(r.err, "seq: Is a directory") || strstr(r.err, "no poses"))
+	if (r.status != 1 || !strstr(r.err, "seq is a directory") || strstr(r.err, "no poses"))
 		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
 }
 
