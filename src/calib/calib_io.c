@@ -14,6 +14,7 @@
 #include "util/errbuf.h"
 #include "util/input.h"
 #include "util/read_file.h"
+#include "util/text_guard.h"
 
 /* Calibration files are small; anything bigger is not one. */
 #define CALIB_MAX_BYTES (4 * 1024 * 1024)
@@ -116,6 +117,8 @@ const char *mvod_calib_dist_counts(enum mvod_cam_model model)
 
 static cJSON *json_parse(const char *text, char *err, size_t errlen)
 {
+	if (mvod_text_guard(text, strlen(text), MVOD_TEXT_JSON, err, errlen))
+		return NULL;
 	cJSON *root = cJSON_Parse(text);
 	if (!root)
 		mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
