@@ -26,7 +26,8 @@ int mvod_lcmlog_check(int fd, struct mvod_lcmlog_check *out);
 
 /*
  * What every reader of a log (mvod view, --speed-url file://) does before LCM reads it:
- * checks the log at path. 0 when LCM can read it safely: sound, or only cut short at its end
+ * opens path through the input path (util/input.h: noted as an input, so no output of the
+ * run may be it; a regular file only) and checks the log. 0 when LCM can read it safely: sound, or only cut short at its end
  * (out->cut; the caller may warn). Else a one-line reason naming path in err and -EIO when it
  * is corrupt (where, and the truncate that keeps the intact events), -ENODATA when it holds
  * no whole event, -errno when it cannot be read.

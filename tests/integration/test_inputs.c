@@ -1,7 +1,8 @@
 /*
  * Every input checked as the best ones are (issue 36), end to end through the real binary:
- * nested YAML refused before libyaml parses it, and a stop honoured while mvod starts; each
- * run is bounded in time, so what once hung fails here instead of holding the suite.
+ * an input never overwritten (the speed log); line files that are FIFOs, devices, not text
+ * or of too long a line refused with file and line; nested YAML refused before libyaml parses
+ * it. Each run is bounded in time, so what once hung fails here instead of holding the suite.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -114,9 +115,107 @@ static void test_nested_yaml(void **state)
 		       "--no-lcm", NULL);
 }
 
+/* The bytes of path, malloc'd, their count in *len. */
+static char *slurp(const char *path, size_t *len)
+{
+	const char *slash = strrchr(path, '/');
+	char dir[300];
+	snprintf(dir, sizeof(dir), "%.*s", (int)(slash - path), path);
+	return harness_slurp(dir, slash + 1, len);
+}
+
+/*
+ * Class 1: the --speed-url log is an input, so the LCM log or the trajectory cannot be it
+ * (both once wrote over it, exit 0: the speed gone from the frame where the writer caught up).
+ */
+static void test_speed_log_is_input(void **state)
+{
+	(void)state;
+	char gt[300], log[300], speed[340], write[340], images[300];
+	snprintf(gt, sizeof(gt), "%s/gt.tum", png);
+	snprintf(log, sizeof(log), "%s/speed.lcmlog", harness_tmpdir());
+	snprintf(images, sizeof(images), "images:%s/images", png);
+	char *mk[] = {(char *)harness_bin("MVOD_MKSPEEDLOG"), gt, log, NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(mk, &r), 0);
+	assert_int_equal(r.status, 0);
+	size_t before_len, after_len;
+	char *before = slurp(log, &before_len);
+	snprintf(speed, sizeof(speed), "file://%s?mode=r", log);
+	snprintf(write, sizeof(write), "file://%s?mode=w", log);
+	expect_refused("is a file this run reads", "--source", images, "--calib", calib, "--scale",
+		       "external", "--speed-url", speed, "--lcm-url", write, NULL);
+	expect_refused("is a file this run reads", "--source", images, "--calib", calib, "--scale",
+		       "external", "--speed-url", speed, "--no-lcm", "--trajectory", log, NULL);
+	char *after = slurp(log, &after_len);
+	assert_int_equal(after_len, before_len);
+	assert_memory_equal(after, before, before_len);
+	free(before);
+	free(after);
+}
+
+/* A folder of links to the clip's frames and a times.txt of text, or a FIFO when NULL. */
+static const char *frames_with_times(const char *name, const char *text, size_t len)
+{
+	static char dir[300];
+	char link[400], frame[400], times[400];
+	snprintf(dir, sizeof(dir), "%s/%s", harness_tmpdir(), name);
+	assert_int_equal(mkdir(dir, 0755), 0);
+	for (int i = 0; i < FRAMES; i++) {
+		snprintf(frame, sizeof(frame), "%s/images/%06d.png", png, i);
+		snprintf(link, sizeof(link), "%s/%06d.png", dir, i);
+		assert_int_equal(symlink(frame, link), 0);
+	}
+	snprintf(times, sizeof(times), "%s/times.txt", dir);
+	if (!text) {
+		assert_int_equal(mkfifo(times, 0600), 0);
+		return dir;
+	}
+	FILE *f = fopen(times, "wb");
+	assert_non_null(f);
+	assert_int_equal(fwrite(text, 1, len, f), len);
+	fclose(f);
+	return dir;
+}
+
+/*
+ * Class 4: every line file through the one bounded reader. A FIFO (which blocked for ever), a
+ * device (/dev/zero, read to 2 GB before "no poses"), a NUL (the line taken up to it, exit 0)
+ * and a line too long are each refused with the file and the line.
+ */
+static void test_line_files(void **state)
+{
+	(void)state;
+	char source[400];
+	snprintf(source, sizeof(source), "images:%s", frames_with_times("fifo", NULL, 0));
+	char fifo[420];
+	snprintf(fifo, sizeof(fifo), "%s/times.txt", source + 7);
+	int hold = open(fifo, O_RDWR | O_CLOEXEC); /* a writer that never writes */
+	assert_true(hold >= 0);
+	expect_refused("times.txt is a FIFO: the times.txt must be a regular file", "--source",
+		       source, "--calib", calib, "--no-lcm", NULL);
+	close(hold);
+	snprintf(source, sizeof(source), "images:%s/images", png);
+	expect_refused("ground truth: /dev/zero is a character device", "--source", source,
+		       "--calib", calib, "--no-lcm", "--gt", "/dev/zero", NULL);
+	static const char nul[] = "0.0\n0.1\n0.2\n0.3\n0.4\0 junk\n0.5\n0.6\n0.7\n0.8\n0.9\n";
+	snprintf(source, sizeof(source), "images:%s", frames_with_times("nul", nul, sizeof(nul) - 1));
+	expect_refused("times.txt line 5: byte 0x00 at column 4 is no text", "--source", source,
+		       "--calib", calib, "--no-lcm", NULL);
+	static char text[10000];
+	size_t n = (size_t)snprintf(text, sizeof(text), "0.0\n0.1\n0.2");
+	memset(text + n, '0', 9000);
+	memcpy(text + n + 9000, "\n0.3\n", 5);
+	snprintf(source, sizeof(source), "images:%s", frames_with_times("long", text, n + 9005));
+	expect_refused("times.txt line 3 is longer than 8191 bytes", "--source", source, "--calib",
+		       calib, "--no-lcm", NULL);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
+		cmocka_unit_test(test_speed_log_is_input),
+		cmocka_unit_test(test_line_files),
 		cmocka_unit_test(test_nested_yaml),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
