@@ -76,7 +76,8 @@ int mvod_ds_out_of_order(const char *path, size_t lineno, int64_t ns, int64_t pr
 			 mvod_ds_seconds(prev, b), prev_line, what);
 }
 
-int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p)
+int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p, char *why,
+		       size_t whylen)
 {
 	double v[7];
 	for (int k = 0; k < 7; k++) {
@@ -93,11 +94,9 @@ int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *
 	s += strspn(s, " \t");
 	if (*s && (sep == ' ' || *s != sep))
 		return -EINVAL;
-	memcpy(p->t, v, sizeof(p->t));
 	const double q[4] = {w_first ? v[3] : v[6], v[w_first ? 4 : 3], v[w_first ? 5 : 4],
 			     v[w_first ? 6 : 5]};
-	mvod_quat_to_rot(q, p->R);
-	return 0;
+	return mvod_pose_from_quat(v, q, p, why, whylen);
 }
 
 /* Appends "dir/name\0" to the text of f. */

@@ -49,9 +49,12 @@ static int add_line(void *ctx, char *line, size_t lineno, char *err, size_t errl
 	const struct mvod_dataset *ds = g->ds;
 	int64_t ns;
 	struct mvod_pose body;
-	if (ds->gt_line(line, &ns, &body) < 0)
-		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not \"%s\"",
-				 ds->gt_path, lineno, line, ds->gt_layout);
+	char why[256] = "";
+	if (ds->gt_line(line, &ns, &body, why, sizeof(why)) < 0)
+		return why[0] ? mvod_errf(err, errlen, -EINVAL, "%s line %zu: %s", ds->gt_path,
+					  lineno, why)
+			      : mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not "
+					  "\"%s\"", ds->gt_path, lineno, line, ds->gt_layout);
 	if (g->n > 0 && ns <= g->ns[g->n - 1])
 		return mvod_ds_out_of_order(ds->gt_path, lineno, ns, g->ns[g->n - 1], g->last_line,
 					    "poses", err, errlen);

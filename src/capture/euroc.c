@@ -76,12 +76,13 @@ static int add_frame(void *ctx, char *line, size_t lineno, char *err, size_t err
 }
 
 /* "timestamp [ns], p_RS_R x y z [m], q_RS w x y z, ..." (velocities and biases follow). */
-static int gt_line(const char *line, int64_t *ns, struct mvod_pose *body)
+static int gt_line(const char *line, int64_t *ns, struct mvod_pose *body, char *why,
+		   size_t whylen)
 {
 	const char *s;
 	if (mvod_ds_parse_ns(line, &s, ns) < 0)
 		return -EINVAL;
-	return mvod_ds_parse_pose(s, ',', true, body);
+	return mvod_ds_parse_pose(s, ',', true, body, why, whylen);
 }
 
 static int euroc_open(void *priv, const char *location, char *err, size_t errlen)

@@ -84,12 +84,13 @@ static int add_rgb(void *ctx, char *line, size_t lineno, char *err, size_t errle
 }
 
 /* groundtruth.txt: "timestamp tx ty tz qx qy qz qw", seconds, metres. */
-static int gt_line(const char *line, int64_t *ns, struct mvod_pose *cam)
+static int gt_line(const char *line, int64_t *ns, struct mvod_pose *cam, char *why,
+		   size_t whylen)
 {
 	const char *s;
 	if (mvod_ds_parse_seconds(line, &s, ns) < 0)
 		return -EINVAL;
-	return mvod_ds_parse_pose(s, ' ', false, cam);
+	return mvod_ds_parse_pose(s, ' ', false, cam, why, whylen);
 }
 
 static int open_rgbd(struct tum *t, char *err, size_t errlen)

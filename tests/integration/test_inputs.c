@@ -1,6 +1,7 @@
 /*
  * Every input checked as the best ones are (issue 36), end to end through the real binary:
- * an input never overwritten (the speed log); line files that are FIFOs, devices, not text
+ * an input never overwritten (the speed log); no pose that is none taken from any ground
+ * truth; line files that are FIFOs, devices, not text
  * or of too long a line refused with file and line; nested YAML refused before libyaml parses
  * it. Each run is bounded in time, so what once hung fails here instead of holding the suite.
  */
@@ -67,6 +68,15 @@ static void run_bounded(char *const argv[], struct run_result *r)
 	harness_read_file(err, r->err, sizeof(r->err));
 }
 
+/* The bytes of path, malloc'd, their count in *len. */
+static char *slurp(const char *path, size_t *len)
+{
+	const char *slash = strrchr(path, '/');
+	char dir[300];
+	snprintf(dir, sizeof(dir), "%.*s", (int)(slash - path), path);
+	return harness_slurp(dir, slash + 1, len);
+}
+
 /* mvod with the arguments (NULL-terminated) fails, in time, saying needle. */
 static void expect_refused(const char *needle, ...)
 {
@@ -95,6 +105,78 @@ static void write_repeated(const char *path, const char *prefix, char c, size_t 
 	fclose(f);
 }
 
+/* Writes text over path, keeping what was there in *saved (malloc'd) for put_back. */
+static void replace(const char *path, const char *text, char **saved, size_t *len)
+{
+	*saved = slurp(path, len);
+	harness_write_file(path, text);
+}
+
+static void put_back(const char *path, char *saved, size_t len)
+{
+	FILE *f = fopen(path, "wb");
+	assert_non_null(f);
+	assert_int_equal(fwrite(saved, 1, len, f), len);
+	fclose(f);
+	free(saved);
+}
+
+/* The lines of path with line k (from 1) replaced by line, in a static buffer. */
+static const char *with_line(const char *path, int k, const char *line)
+{
+	static char text[65536];
+	size_t len, n = 0;
+	char *old = slurp(path, &len);
+	int at = 1;
+	for (char *s = old, *nl; s < old + len; s = nl + 1, at++) {
+		nl = memchr(s, '\n', (size_t)(old + len - s));
+		if (!nl)
+			nl = old + len;
+		n += (size_t)snprintf(text + n, sizeof(text) - n, "%.*s\n", at == k ? (int)strlen(line)
+				      : (int)(nl - s), at == k ? line : s);
+	}
+	free(old);
+	return text;
+}
+
+/*
+ * Class 2: ground truth that is no pose, from every source, is refused with file and line.
+ * A zero quaternion in EuRoC's ground truth made 39 of 40 trajectory lines nan with --scale gt
+ * (exit 0) and a "valid" mvod bench row; a KITTI rotation of zeros and a position of 1e308
+ * were taken as they were.
+ */
+static void test_gt_poses(void **state)
+{
+	(void)state;
+	char gt[300], source[300], out[300], csv[300], *saved;
+	size_t len;
+	snprintf(gt, sizeof(gt), "%s/mav0/state_groundtruth_estimate0/data.csv", euroc);
+	snprintf(source, sizeof(source), "euroc:%s", euroc);
+	snprintf(out, sizeof(out), "%s/gt-poses.tum", harness_tmpdir());
+	snprintf(csv, sizeof(csv), "%s/gt-poses.csv", harness_tmpdir());
+	replace(gt, with_line(gt, 3, "1403636579863555584,4.81,-1.72,0.77,0,0,0,0,0,0,0,0,0,0,0,0,"
+			      "0"), &saved, &len);
+	expect_refused("data.csv line 3: quaternion (qx qy qz qw) = (0 0 0 0) has length 0, not 1",
+		       "--source", source, "--scale", "gt", "--trajectory", out, "--no-lcm", NULL);
+	expect_refused("data.csv line 3: quaternion", "bench", "--source", source, "--scale", "gt",
+		       "--csv", csv, NULL);
+	assert_int_equal(access(out, F_OK), -1);
+	assert_int_equal(access(csv, F_OK), -1);
+	put_back(gt, saved, len);
+	char kitti[300], tum[300], bad[300], images[300];
+	snprintf(kitti, sizeof(kitti), "%s/gt.kitti", png);
+	snprintf(tum, sizeof(tum), "%s/gt.tum", png);
+	snprintf(bad, sizeof(bad), "%s/bad.kitti", harness_tmpdir());
+	snprintf(images, sizeof(images), "images:%s/images", png);
+	harness_write_file(bad, with_line(kitti, 2, "0 0 0 0.1 0 0 0 0 0 0 0 1"));
+	expect_refused("bad.kitti:2: rotation [0 0 0; 0 0 0; 0 0 0] is no rotation", "--source",
+		       images, "--calib", calib, "--gt", bad, "--scale", "gt", "--no-lcm", NULL);
+	snprintf(bad, sizeof(bad), "%s/bad.tum", harness_tmpdir());
+	harness_write_file(bad, with_line(tum, 4, "0.300000 1e308 0 0.3 0 0 0 1"));
+	expect_refused("bad.tum:4: position (1e+308 0 0.3) m is that far", "--source", images,
+		       "--calib", calib, "--gt", bad, "--no-lcm", NULL);
+}
+
 /*
  * Class 3: nested YAML is refused by the guard before libyaml parses it (a 300 KB calibration
  * took 210 s, a 1 MiB sensor.yaml over 13 minutes), with the line.
@@ -113,15 +195,6 @@ static void test_nested_yaml(void **state)
 	snprintf(source, sizeof(source), "euroc:%s", euroc);
 	expect_refused("sensor.yaml line 2: nested more than 64 levels deep", "--source", source,
 		       "--no-lcm", NULL);
-}
-
-/* The bytes of path, malloc'd, their count in *len. */
-static char *slurp(const char *path, size_t *len)
-{
-	const char *slash = strrchr(path, '/');
-	char dir[300];
-	snprintf(dir, sizeof(dir), "%.*s", (int)(slash - path), path);
-	return harness_slurp(dir, slash + 1, len);
 }
 
 /*
@@ -216,6 +289,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_speed_log_is_input),
 		cmocka_unit_test(test_line_files),
+		cmocka_unit_test(test_gt_poses),
 		cmocka_unit_test(test_nested_yaml),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
