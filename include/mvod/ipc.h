@@ -77,6 +77,11 @@ int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st);
  */
 struct _mvod_status2_t;
 void mvod_status_to_msg(const struct mvod_status *st, struct _mvod_status2_t *msg);
+/*
+ * A message's state byte as an enum mvod_run_state value (pipeline.h): itself when it is one,
+ * else MVOD_RUN_UNKNOWN (-1), so that no reader loads an out-of-range enum.
+ */
+int mvod_run_state_from_wire(int state);
 void mvod_status_from_msg(const struct _mvod_status2_t *msg, struct mvod_status *st);
 /*
  * A v1 message as its v2 type: the same fields, the new ones 0 (mvod view reads logs of

@@ -29,6 +29,12 @@ enum mvod_run_state {
 	MVOD_RUN_LOST = MVOD_STATE_LOST,
 	MVOD_RUN_SOURCE_DOWN = 4, /* a live source went away; the capture thread reopens it */
 	MVOD_RUN_STOPPING = 5,    /* the last status of a run */
+	/*
+	 * A state byte no value above (a newer sender's, a corrupt log) as a message reader
+	 * takes it (mvod_run_state_from_wire): loading the byte itself into the enum is undefined
+	 * in C++ (mvod view's drawing; UBSan's -fsanitize=enum).
+	 */
+	MVOD_RUN_UNKNOWN = -1,
 };
 const char *mvod_run_state_name(enum mvod_run_state s);
 

@@ -363,6 +363,9 @@ static void print_summary(const struct viewer *w)
 		printf(" (end of log, cut short at byte %lld)\n", (long long)w->cut_at);
 	else
 		printf("%s\n", w->end_of_log ? " (end of log)" : "");
+	if (w->view.refused)
+		LOG(WARN, "%lld pose messages held no pose and are not drawn; the first, %s",
+		    (long long)w->view.refused, w->view.refused_why);
 }
 
 static int view(const struct cli *c)
