@@ -565,8 +565,9 @@ static void log_refused_speed(struct run *r)
 			  "refused; publish mvod.speed_t there or name its channel with "
 			  "--speed-channel", ch);
 	if (c.bad_time && !r->speed_refused.bad_time)
-		LOG(WARN, "an mvod.speed_t on %s has utime %lld, not after the one before: refused "
-			  "(times must increase; later ones are only counted)", ch,
+		LOG(WARN, "an mvod.speed_t on %s has utime %lld, not after the one before or not "
+			  "in 0 .. 2^61 us: refused (times must increase; later ones are only "
+			  "counted)", ch,
 		    (long long)c.last_bad_utime);
 	if (c.bad_value && !r->speed_refused.bad_value)
 		LOG(WARN, "an mvod.speed_t on %s has a speed or distance that is not finite or "

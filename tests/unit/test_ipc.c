@@ -430,6 +430,43 @@ static void test_speed_log(void **state)
 	tmplog_fini(&t);
 }
 
+/*
+ * Times at int64's ends are refused as times (they were differenced and overflowed: UBSan);
+ * so is a negative one; a frame's time there finds no sample.
+ */
+static void test_speed_extreme_times(void **state)
+{
+	(void)state;
+	struct tmplog t;
+	tmplog_init(&t);
+	struct mvod_lcm_log *log;
+	assert_int_equal(mvod_lcm_log_open("speed log", t.path, 256, &log, NULL, 0), 0);
+	static const mvod_speed_t samples[] = {{-INT64_MAX, 1.0, 0, 0.0}, {-1, 1.0, 0, 0.0},
+					       {INT64_MAX, 1.0, 0, 0.0}, {1000000, 1.0, 0, 0.0}};
+	for (int i = 0; i < 4; i++) {
+		uint8_t buf[64];
+		int len = mvod_speed_t_encode(buf, 0, sizeof(buf), &samples[i]);
+		assert_true(len > 0);
+		assert_int_equal(mvod_lcm_log_write(log, "MVOD_SPEED", buf, (size_t)len), 0);
+	}
+	assert_int_equal(mvod_lcm_log_close(log), 0);
+	char url[160];
+	snprintf(url, sizeof(url), "file://%s?mode=r", t.path);
+	struct mvod_speed *s;
+	assert_int_equal(mvod_speed_create(url, NULL, &s, NULL, 0), 0);
+	double m = -1;
+	assert_int_equal(mvod_speed_odometer(s, INT64_MIN, &m), -EAGAIN);
+	assert_int_equal(mvod_speed_odometer(s, INT64_MAX, &m), -EAGAIN);
+	struct mvod_speed_counts c;
+	mvod_speed_counts(s, &c);
+	assert_int_equal(c.bad_time, 3);
+	assert_int_equal(c.accepted, 1);
+	assert_int_equal(mvod_speed_odometer(s, 1250000, &m), 0);
+	assert_true(m == 0.25); /* the one sample at its speed */
+	mvod_speed_destroy(s);
+	tmplog_fini(&t);
+}
+
 /* A NULL url goes to LCM_DEFAULT_URL; pointed at a log file, nothing touches the network. */
 static void test_default_url_from_env(void **state)
 {
@@ -614,6 +651,7 @@ int main(void)
 		cmocka_unit_test(test_send_seam),
 		cmocka_unit_test(test_log_urls),
 		cmocka_unit_test(test_speed_log),
+		cmocka_unit_test(test_speed_extreme_times),
 		cmocka_unit_test(test_upgrade),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
