@@ -3,7 +3,6 @@
 #include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
-#include <fcntl.h>
 #include <limits.h>
 #include <math.h>
 #include <stdbool.h>
@@ -14,15 +13,17 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "capture/image_header.h"
 #include "mvod/log.h"
-#include "util/output.h"
+#include "util/input.h"
 #include "util/lines.h"
+#include "util/output.h"
 
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
 
 /*
- * Bounds on a frame file, checked with fstat before a byte is read, so that one huge file
+ * Bounds on a frame file, checked by the input path before a byte is read, so that one huge file
  * neither takes gigabytes of memory nor stays in the reused buffer. The first image may be
  * up to 256 MiB: an uncompressed 16-bit colour 8K frame (7680 x 4320 x 6 bytes) is 199 MB.
  * Later ones may be as large as the first image's size stored uncompressed at 16 bits and
@@ -205,16 +206,13 @@ static int load_times(struct mvod_images *im, const char *path, char *err, size_
 	return ret;
 }
 
-/* Reads len bytes, retrying after signals; -EIO when the file is shorter. */
-static int read_all(int fd, uint8_t *buf, size_t len)
+/* Reads len bytes; -EIO when the file is shorter. */
+static int read_all(struct mvod_input *in, uint8_t *buf, size_t len)
 {
-	size_t got = 0;
-	while (got < len) {
-		ssize_t r = read(fd, buf + got, len - got);
-		if (r < 0 && errno == EINTR)
-			continue;
+	for (size_t got = 0; got < len;) {
+		ssize_t r = mvod_input_read(in, buf + got, len - got, NULL, 0);
 		if (r < 0)
-			return -errno;
+			return (int)r;
 		if (r == 0)
 			return -EIO;
 		got += (size_t)r;
@@ -223,52 +221,48 @@ static int read_all(int fd, uint8_t *buf, size_t len)
 }
 
 /*
- * The whole of path into im->buf: -EFBIG beyond im->limit, -ENODATA for no regular file.
- * O_NONBLOCK: a FIFO named like a frame must not block the open.
+ * The whole of path into im->buf through the input path (noted at open; never blocking):
+ * -EFBIG beyond im->limit, -ENODATA for no regular file.
  */
 static int read_file(struct mvod_images *im, const char *path, size_t *len)
 {
-	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-	if (fd < 0)
-		return -errno;
-	int ret = 0;
-	struct stat st;
-	if (fstat(fd, &st) < 0) {
-		ret = -errno;
-		goto out;
-	}
-	size_t size = (size_t)st.st_size;
-	if (!S_ISREG(st.st_mode) || size > im->limit) {
-		ret = S_ISREG(st.st_mode) ? -EFBIG : -ENODATA;
-		goto out;
-	}
+	struct mvod_input in;
+	int ret = mvod_input_open(&in, path, "frame", MVOD_INPUT_NOTED, im->limit, NULL, 0);
+	if (ret)
+		return ret == -EINVAL || ret == -EISDIR ? -ENODATA : ret;
+	size_t size = (size_t)in.size;
 	if (size > im->cap) {
 		uint8_t *grown = realloc(im->buf, size);
-		if (!grown) {
-			ret = -ENOMEM;
-			goto out;
+		ret = grown ? 0 : -ENOMEM;
+		if (grown) {
+			im->buf = grown;
+			im->cap = size;
 		}
-		im->buf = grown;
-		im->cap = size;
 	}
-	ret = read_all(fd, im->buf, size);
+	if (!ret)
+		ret = read_all(&in, im->buf, size);
+	mvod_input_close(&in);
 	*len = size;
-out:
-	close(fd);
 	return ret;
 }
 
 /*
- * Image i decoded into the decoder's buffer: -errno from reading (-EFBIG for too large a
- * file), -EINVAL when it is no image.
+ * Image i decoded into the decoder's buffer once its header passed, *w x *h the size the
+ * header states: -errno from reading (-EFBIG for too large a file), -EINVAL when it is no
+ * image, -EMSGSIZE when the header states another size than the sequence's, -E2BIG a size
+ * past MVOD_FRAME_MAX_PIXELS; none of these is decoded.
  */
-static int load(struct mvod_images *im, size_t i, struct mvod_image *img)
+static int load(struct mvod_images *im, size_t i, struct mvod_image *img, int *w, int *h)
 {
 	size_t len = 0;
 	int ret = read_file(im, im->paths[i], &len);
-	if (ret < 0)
-		return ret;
-	return mvod_imgdec_decode(im->dec, im->buf, len, img);
+	if (!ret)
+		ret = mvod_image_header_size(im->buf, len, w, h);
+	if (!ret && im->info.width && (*w != im->info.width || *h != im->info.height))
+		ret = -EMSGSIZE;
+	if (!ret && (int64_t)*w * *h > MVOD_FRAME_MAX_PIXELS)
+		ret = -E2BIG;
+	return ret ? ret : mvod_imgdec_decode(im->dec, im->buf, len, img);
 }
 
 /* The first image fixes the frame size and format of the whole sequence. */
@@ -279,8 +273,13 @@ static int load_first(struct mvod_images *im, char *err, size_t errlen)
 		return mvod_errf(err, errlen, ret, "cannot create an image decoder: %s",
 					 strerror(-ret));
 	struct mvod_image img;
+	int w = 0, h = 0;
 	im->limit = FIRST_MAX_BYTES;
-	ret = load(im, 0, &img);
+	ret = load(im, 0, &img, &w, &h);
+	if (ret == -E2BIG)
+		return mvod_errf(err, errlen, ret, "%s is %dx%d pixels, its header says: more than "
+				 "the %lld (8192x8192) of any frame mvod takes", im->paths[0], w, h,
+				 (long long)MVOD_FRAME_MAX_PIXELS);
 	if (ret == -EFBIG)
 		return mvod_errf(err, errlen, ret, "%s is larger than %zu MiB, more than any camera "
 					 "frame (an uncompressed 16-bit colour 8K frame is 190 MiB): not "
@@ -378,12 +377,14 @@ int mvod_images_read(void *priv, struct mvod_frame *frame, const struct mvod_ima
 	frame->index = (int64_t)i;
 	frame->utime = im->times_us ? im->times_us[i] : (int64_t)i * DEFAULT_PERIOD_US;
 	/* One unreadable file is one bad frame (-EINVAL, which callers skip), not a broken source. */
-	int ret = load(im, i, &frame->img);
+	int w, h;
+	int ret = load(im, i, &frame->img, &w, &h);
 	if (ret == 0)
 		return 0;
-	frame->bad = ret == -EFBIG    ? MVOD_BAD_TOO_LARGE
-		     : ret == -EINVAL ? MVOD_BAD_CORRUPT
-				      : MVOD_BAD_UNREADABLE;
+	frame->bad = ret == -EFBIG      ? MVOD_BAD_TOO_LARGE
+		     : ret == -EMSGSIZE ? MVOD_BAD_SIZE
+		     : ret == -EINVAL   ? MVOD_BAD_CORRUPT
+					: MVOD_BAD_UNREADABLE;
 	return -EINVAL;
 }
 

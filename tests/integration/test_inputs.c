@@ -14,11 +14,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmocka.h>
+#include <zlib.h>
 
 #include "harness.h"
 
@@ -47,6 +49,8 @@ static int setup(void **state)
  * Runs argv (NULL-terminated) for at most BOUND_S seconds, stdout and stderr into r; a run
  * that takes longer is killed and fails the test.
  */
+static long max_rss_kb; /* of the last run_bounded */
+
 static void run_bounded(char *const argv[], struct run_result *r)
 {
 	char out[300], err[300];
@@ -54,7 +58,8 @@ static void run_bounded(char *const argv[], struct run_result *r)
 	snprintf(err, sizeof(err), "%s/run.err", harness_tmpdir());
 	pid_t pid = harness_spawn(argv, out, err);
 	int st = 0, waited = 0;
-	while (waitpid(pid, &st, WNOHANG) == 0) {
+	struct rusage ru;
+	while (wait4(pid, &st, WNOHANG, &ru) == 0) {
 		if (waited++ == BOUND_S * 20) {
 			kill(pid, SIGKILL);
 			waitpid(pid, &st, 0);
@@ -62,6 +67,7 @@ static void run_bounded(char *const argv[], struct run_result *r)
 		}
 		usleep(50000);
 	}
+	max_rss_kb = ru.ru_maxrss;
 	r->exited = WIFEXITED(st);
 	r->status = WIFEXITED(st) ? WEXITSTATUS(st) : WTERMSIG(st);
 	harness_read_file(out, r->out, sizeof(r->out));
@@ -139,6 +145,103 @@ static const char *with_line(const char *path, int k, const char *line)
 	return text;
 }
 
+/* A folder of links to the clip's frames and a times.txt of text, or a FIFO when NULL. */
+static const char *frames_with_times(const char *name, const char *text, size_t len)
+{
+	static char dir[300];
+	char link[400], frame[400], times[400];
+	snprintf(dir, sizeof(dir), "%s/%s", harness_tmpdir(), name);
+	assert_int_equal(mkdir(dir, 0755), 0);
+	for (int i = 0; i < FRAMES; i++) {
+		snprintf(frame, sizeof(frame), "%s/images/%06d.png", png, i);
+		snprintf(link, sizeof(link), "%s/%06d.png", dir, i);
+		assert_int_equal(symlink(frame, link), 0);
+	}
+	snprintf(times, sizeof(times), "%s/times.txt", dir);
+	if (!text) {
+		assert_int_equal(mkfifo(times, 0600), 0);
+		return dir;
+	}
+	FILE *f = fopen(times, "wb");
+	assert_non_null(f);
+	assert_int_equal(fwrite(text, 1, len, f), len);
+	fclose(f);
+	return dir;
+}
+
+/* A PNG chunk: length, type, data, CRC of type and data. */
+static void put_chunk(FILE *f, const char *type, const uint8_t *data, uint32_t len)
+{
+	uint8_t be[4] = {len >> 24, len >> 16, len >> 8, len};
+	fwrite(be, 1, 4, f);
+	fwrite(type, 1, 4, f);
+	data = data ? data : (const uint8_t *)""; /* crc32 of NULL is its initial value */
+	fwrite(data, 1, len, f);
+	uLong crc = crc32(crc32(0, (const Bytef *)type, 4), data, len);
+	uint8_t c[4] = {crc >> 24, crc >> 16, crc >> 8, crc};
+	fwrite(c, 1, 4, f);
+}
+
+/* An 8-bit grey PNG of w x h black pixels: a few hundred KB that decode to w * h bytes. */
+static void write_png_bomb(const char *path, uint32_t w, uint32_t h)
+{
+	FILE *f = fopen(path, "wb");
+	assert_non_null(f);
+	fwrite("\x89PNG\r\n\x1a\n", 1, 8, f);
+	uint8_t ihdr[13] = {w >> 24, w >> 16, w >> 8, w, h >> 24, h >> 16, h >> 8, h, 8, 0, 0, 0, 0};
+	put_chunk(f, "IHDR", ihdr, 13);
+	z_stream z = {0};
+	assert_int_equal(deflateInit(&z, 9), Z_OK);
+	uint8_t *row = calloc(1, w + 1), *out = malloc(1 << 20);
+	assert_true(row && out);
+	for (uint32_t y = 0; y <= h; y++) {
+		z.next_in = row;
+		z.avail_in = y < h ? w + 1 : 0;
+		do {
+			z.next_out = out;
+			z.avail_out = 1 << 20;
+			deflate(&z, y < h ? Z_NO_FLUSH : Z_FINISH);
+			if (z.avail_out < 1 << 20)
+				put_chunk(f, "IDAT", out, (1 << 20) - z.avail_out);
+		} while (z.avail_out == 0 || (y == h && z.avail_in));
+	}
+	deflateEnd(&z);
+	put_chunk(f, "IEND", NULL, 0);
+	free(row);
+	free(out);
+	fclose(f);
+}
+
+/*
+ * Class 1: the --speed-url log is an input, so the LCM log or the trajectory cannot be it
+ * (both once wrote over it, exit 0: the speed gone from the frame where the writer caught up).
+ */
+static void test_speed_log_is_input(void **state)
+{
+	(void)state;
+	char gt[300], log[300], speed[340], write[340], images[300];
+	snprintf(gt, sizeof(gt), "%s/gt.tum", png);
+	snprintf(log, sizeof(log), "%s/speed.lcmlog", harness_tmpdir());
+	snprintf(images, sizeof(images), "images:%s/images", png);
+	char *mk[] = {(char *)harness_bin("MVOD_MKSPEEDLOG"), gt, log, NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(mk, &r), 0);
+	assert_int_equal(r.status, 0);
+	size_t before_len, after_len;
+	char *before = slurp(log, &before_len);
+	snprintf(speed, sizeof(speed), "file://%s?mode=r", log);
+	snprintf(write, sizeof(write), "file://%s?mode=w", log);
+	expect_refused("is a file this run reads", "--source", images, "--calib", calib, "--scale",
+		       "external", "--speed-url", speed, "--lcm-url", write, NULL);
+	expect_refused("is a file this run reads", "--source", images, "--calib", calib, "--scale",
+		       "external", "--speed-url", speed, "--no-lcm", "--trajectory", log, NULL);
+	char *after = slurp(log, &after_len);
+	assert_int_equal(after_len, before_len);
+	assert_memory_equal(after, before, before_len);
+	free(before);
+	free(after);
+}
+
 /*
  * Class 2: ground truth that is no pose, from every source, is refused with file and line.
  * A zero quaternion in EuRoC's ground truth made 39 of 40 trajectory lines nan with --scale gt
@@ -198,60 +301,6 @@ static void test_nested_yaml(void **state)
 }
 
 /*
- * Class 1: the --speed-url log is an input, so the LCM log or the trajectory cannot be it
- * (both once wrote over it, exit 0: the speed gone from the frame where the writer caught up).
- */
-static void test_speed_log_is_input(void **state)
-{
-	(void)state;
-	char gt[300], log[300], speed[340], write[340], images[300];
-	snprintf(gt, sizeof(gt), "%s/gt.tum", png);
-	snprintf(log, sizeof(log), "%s/speed.lcmlog", harness_tmpdir());
-	snprintf(images, sizeof(images), "images:%s/images", png);
-	char *mk[] = {(char *)harness_bin("MVOD_MKSPEEDLOG"), gt, log, NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(mk, &r), 0);
-	assert_int_equal(r.status, 0);
-	size_t before_len, after_len;
-	char *before = slurp(log, &before_len);
-	snprintf(speed, sizeof(speed), "file://%s?mode=r", log);
-	snprintf(write, sizeof(write), "file://%s?mode=w", log);
-	expect_refused("is a file this run reads", "--source", images, "--calib", calib, "--scale",
-		       "external", "--speed-url", speed, "--lcm-url", write, NULL);
-	expect_refused("is a file this run reads", "--source", images, "--calib", calib, "--scale",
-		       "external", "--speed-url", speed, "--no-lcm", "--trajectory", log, NULL);
-	char *after = slurp(log, &after_len);
-	assert_int_equal(after_len, before_len);
-	assert_memory_equal(after, before, before_len);
-	free(before);
-	free(after);
-}
-
-/* A folder of links to the clip's frames and a times.txt of text, or a FIFO when NULL. */
-static const char *frames_with_times(const char *name, const char *text, size_t len)
-{
-	static char dir[300];
-	char link[400], frame[400], times[400];
-	snprintf(dir, sizeof(dir), "%s/%s", harness_tmpdir(), name);
-	assert_int_equal(mkdir(dir, 0755), 0);
-	for (int i = 0; i < FRAMES; i++) {
-		snprintf(frame, sizeof(frame), "%s/images/%06d.png", png, i);
-		snprintf(link, sizeof(link), "%s/%06d.png", dir, i);
-		assert_int_equal(symlink(frame, link), 0);
-	}
-	snprintf(times, sizeof(times), "%s/times.txt", dir);
-	if (!text) {
-		assert_int_equal(mkfifo(times, 0600), 0);
-		return dir;
-	}
-	FILE *f = fopen(times, "wb");
-	assert_non_null(f);
-	assert_int_equal(fwrite(text, 1, len, f), len);
-	fclose(f);
-	return dir;
-}
-
-/*
  * Class 4: every line file through the one bounded reader. A FIFO (which blocked for ever), a
  * device (/dev/zero, read to 2 GB before "no poses"), a NUL (the line taken up to it, exit 0)
  * and a line too long are each refused with the file and the line.
@@ -284,13 +333,93 @@ static void test_line_files(void **state)
 		       calib, "--no-lcm", NULL);
 }
 
+/*
+ * Class 5: a later frame whose header states a size not the sequence's is skipped before it is
+ * decoded. A 20000x20000 PNG bomb (~400 KB) decoded to 400 MB first; mvod's whole run stays
+ * under 300 MB (it runs at ~100 MB on these frames; the bomb alone would be 400 MB more).
+ */
+static void test_png_bomb(void **state)
+{
+	(void)state;
+	const char *dir = frames_with_times("bomb", "", 0);
+	char frame[400], source[400];
+	snprintf(frame, sizeof(frame), "%s/000005.png", dir);
+	unlink(frame);
+	write_png_bomb(frame, 20000, 20000);
+	snprintf(frame, sizeof(frame), "%s/times.txt", dir);
+	unlink(frame); /* no times: 10 Hz */
+	snprintf(source, sizeof(source), "images:%s", dir);
+	char *argv[] = {(char *)harness_bin("MVOD"), "--source", source, "--calib", calib,
+			"--no-lcm", NULL};
+	struct run_result r;
+	run_bounded(argv, &r);
+	if (!r.exited || r.status != 0 || !strstr(r.out, "1 skipped: 1 of another size"))
+		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
+	if (max_rss_kb > 300 * 1024)
+		fail_msg("mvod's RSS reached %ld MB: the bomb was decoded", max_rss_kb / 1024);
+}
+
+/*
+ * Class 5 and 8: a first image whose header states more pixels than any frame is refused by
+ * its size, not "Input/output error" after a try to decode 4.3 gigapixels.
+ */
+static void test_huge_first_image(void **state)
+{
+	(void)state;
+	char dir[300], frame[400], source[400];
+	snprintf(dir, sizeof(dir), "%s/huge", harness_tmpdir());
+	assert_int_equal(mkdir(dir, 0755), 0);
+	snprintf(frame, sizeof(frame), "%s/000000.png", dir);
+	FILE *f = fopen(frame, "wb");
+	assert_non_null(f);
+	fwrite("\x89PNG\r\n\x1a\n", 1, 8, f);
+	static const uint8_t ihdr[13] = {0, 0, 0xFF, 0xFF, 0, 0, 0xFF, 0xFF, 8, 0, 0, 0, 0};
+	put_chunk(f, "IHDR", ihdr, 13);
+	put_chunk(f, "IEND", NULL, 0);
+	fclose(f);
+	snprintf(source, sizeof(source), "images:%s", dir);
+	expect_refused("000000.png is 65535x65535 pixels, its header says: more than the 67108864 "
+		       "(8192x8192) of any frame mvod takes", "--source", source, "--calib", calib,
+		       "--no-lcm", NULL);
+	/* A video stream of 72 megapixels, refused by what its header says (no frame needed). */
+	snprintf(dir, sizeof(dir), "%s/huge.avi", harness_tmpdir());
+	char *mk[] = {(char *)harness_bin("MVOD_MKVIDEO"), dir, "rawvideo", "9000x8000", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(mk, &r), 0);
+	assert_int_equal(r.status, 0);
+	snprintf(source, sizeof(source), "file:%s", dir);
+	expect_refused("huge.avi: its frames are larger than the 67108864 pixels", "--source", source,
+		       "--calib", calib, "--no-lcm", NULL);
+}
+
+/* Class 10: a video without a frame is refused at open, as an empty folder is (exit 0 before). */
+static void test_video_without_frames(void **state)
+{
+	(void)state;
+	char video[300], source[310], cal[300];
+	snprintf(video, sizeof(video), "%s/empty.avi", harness_tmpdir());
+	snprintf(source, sizeof(source), "file:%s", video);
+	snprintf(cal, sizeof(cal), "%s/small.json", harness_tmpdir());
+	harness_write_file(cal, "{\"format\": \"mvod-calibration/1\", \"model\": \"pinhole-radtan\", "
+			   "\"image_size\": [64, 48], \"K\": [[60, 0, 31.5], [0, 60, 23.5], [0, 0, "
+			   "1]], \"distortion\": []}\n");
+	char *mk[] = {(char *)harness_bin("MVOD_MKVIDEO"), video, "rawvideo", "64x48", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(mk, &r), 0);
+	assert_int_equal(r.status, 0);
+	expect_refused("holds no frame", "--source", source, "--calib", cal, "--no-lcm", NULL);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_speed_log_is_input),
-		cmocka_unit_test(test_line_files),
 		cmocka_unit_test(test_gt_poses),
 		cmocka_unit_test(test_nested_yaml),
+		cmocka_unit_test(test_line_files),
+		cmocka_unit_test(test_png_bomb),
+		cmocka_unit_test(test_huge_first_image),
+		cmocka_unit_test(test_video_without_frames),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }
