@@ -139,10 +139,14 @@ static int add_mono(void *ctx, char *line, size_t lineno, char *err, size_t errl
 	return mvod_ds_frames_add(&x->frames, x->path, lineno, x->dir, name, ns, err, errlen);
 }
 
-/* DSO's relative calibration (cx, cy < 1): fractions of the image, pixel edges at 0. */
+/*
+ * DSO's relative calibration (0 <= cx, cy < 1): fractions of the image, pixel edges at 0. A
+ * negative principal point is in pixels (outside the image's left or top edge), not a
+ * fraction: taken for one, it made "fx = 368640 px" of a 576 px focal length.
+ */
 static void from_relative(struct mvod_camera *cam)
 {
-	if (cam->cx >= 1 || cam->cy >= 1)
+	if (!(cam->cx >= 0 && cam->cx < 1 && cam->cy >= 0 && cam->cy < 1))
 		return;
 	cam->fx *= cam->width;
 	cam->fy *= cam->height;
