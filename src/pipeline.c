@@ -14,6 +14,7 @@
 #include "util/body_frame.h"
 #include "mvod/speed.h"
 #include "util/clock.h"
+#include "util/errbuf.h"
 #include "util/notify.h"
 #include "util/output.h"
 #include "mvod_status_t.h"
@@ -103,7 +104,7 @@ static int64_t rss_kb(void)
 
 static int open_camera(struct run *r)
 {
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	const struct mvod_run_opts *o = r->o;
 	if (o->calib) {
 		int ret = mvod_calib_load(o->calib, &r->cam, err, sizeof(err));
@@ -145,7 +146,7 @@ static int open_camera(struct run *r)
 /* --gt FILE, or else the ground truth the dataset carries (KITTI poses/, EuRoC, TUM). */
 static int open_gt(struct run *r)
 {
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	const struct mvod_run_opts *o = r->o;
 	int ret;
 	if (o->gt) {
@@ -177,7 +178,7 @@ static int open_gt(struct run *r)
 static int check_output_frame(struct run *r)
 {
 	const struct mvod_run_opts *o = r->o;
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	int ret = mvod_body_frame_init(o->axes, o->camera_to_body, &r->body, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s", err);
@@ -230,7 +231,7 @@ static int open_scale(struct run *r)
 			   "read it where mvod publishes");
 		return -EINVAL;
 	}
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	int ret = mvod_speed_create(o->speed_url, o->speed_channel, &r->speed, err, sizeof(err));
 	if (ret)
 		LOG(ERROR, "--speed-url: %s", err);
@@ -239,7 +240,7 @@ static int open_scale(struct run *r)
 
 static int open_inputs(struct run *r)
 {
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	const struct mvod_run_opts *o = r->o;
 	int ret = mvod_source_open(o->source, &r->src, err, sizeof(err));
 	if (ret) {
@@ -313,7 +314,7 @@ static int add_sink(struct run *r, int ret, const struct mvod_sink *made, bool o
 static int open_outputs(struct run *r)
 {
 	const struct mvod_run_opts *o = r->o;
-	char err[512] = "", target[4096];
+	char err[MVOD_ERR_MAX] = "", target[4096];
 	int ret = o->plot ? mvod_output_check("--plot", o->plot, target, sizeof(target), NULL, err,
 					      sizeof(err))
 			  : 0;

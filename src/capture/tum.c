@@ -26,7 +26,7 @@ struct tum {
 	struct mvod_dataset ds; /* first, so that the dataset ops work on it as is */
 	int freiburg;           /* 1..3 when the intrinsics are that camera's published ones */
 	char dir[PATH_MAX];
-	char why[512];          /* why the folder gives no camera, logged when one is asked for */
+	char why[MVOD_ERR_MAX]; /* why the folder gives no camera, logged when one is asked for */
 };
 
 static_assert(offsetof(struct tum, ds) == 0, "the dataset ops take the tum priv");

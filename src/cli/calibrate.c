@@ -189,7 +189,7 @@ int mvod_cmd_calibrate(int argc, char **argv)
 	/* A live camera never ends: the first Ctrl-C ends the recording and works on it. */
 	c.o.stop = cli_stop_on_interrupt();
 	struct mvod_calib_result res;
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	ret = mvod_calibrate(&c.o, &res, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s", err);

@@ -101,7 +101,7 @@ int cli_parse_board(const char *s, struct mvod_board *b)
 
 int cli_check_writable(const char *opt, const char *path)
 {
-	char target[4096], err[1024];
+	char target[4096], err[MVOD_ERR_MAX];
 	int ret = mvod_output_check(opt, path, target, sizeof(target), NULL, err, sizeof(err));
 	if (ret)
 		fprintf(stderr, "%s: %s\n", cli_prog, err);

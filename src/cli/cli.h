@@ -11,6 +11,7 @@
 #include <stdio.h>
 
 #include "mvod/config.h"
+#include "util/errbuf.h"
 
 #define EXIT_USAGE 2
 /*

@@ -186,7 +186,7 @@ int mvod_cmd_convert(int argc, char **argv)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	struct mvod_camera cam;
 	enum mvod_calib_format from;
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	if (mvod_calib_load_format(c.in, &cam, &from, err, sizeof(err))) {
 		fprintf(stderr, "%s: %s\n", cli_prog, err);
 		return 1;

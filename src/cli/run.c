@@ -150,7 +150,7 @@ static int parse_own(int id, const char *arg, void *ctx)
 /* The config file when there is one, the flags over it. -EINVAL after saying what is wrong. */
 static int load_config(struct cli *c, struct mvod_config *cfg)
 {
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	mvod_config_default(cfg);
 	if (c->config && mvod_config_load(c->config, cfg, err, sizeof(err))) {
 		fprintf(stderr, "%s: --config: %s\n", cli_prog, err);

@@ -255,7 +255,7 @@ static int run_headless(struct viewer *w)
 /* Messages are handled between redraws; after the end of a log the picture stays. */
 static int run_window(struct viewer *w)
 {
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	int ret = mvod_view_display_check(err, sizeof(err));
 	if (!ret)
 		ret = mvod_view_window_open(WINDOW_NAME, err, sizeof(err));
