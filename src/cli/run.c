@@ -15,20 +15,40 @@
 #include "mvod/log.h"
 #include "mvod/pipeline.h"
 #include "util/notify.h"
+#include "util/output.h"
 
-static volatile sig_atomic_t stop_requested, reopen_requested;
+static volatile sig_atomic_t stop_requested, reopen_requested, running;
 
 /*
  * The first SIGINT or SIGTERM asks for a clean stop: the frame in hand is finished, outputs
  * flushed and closed, a last status published. A second one ends mvod at once; that leaves
- * nothing partial in the trajectory, whose every line is a single write(2).
+ * nothing partial in the trajectory, whose every line is a single write(2). Before the frame
+ * loop runs and while no output is open (start-up: the configuration, a calibration, a ground
+ * truth or a source that takes long to read, a FIFO that never delivers), there is nothing
+ * to finish or close: the signal's own action ends mvod at once (it waited for the work to
+ * end, 13 minutes for one YAML file, and systemd's stop timed out).
  */
 static void on_stop(int sig)
 {
 	if (stop_requested)
 		_exit(128 + sig);
+	if (!running && !mvod_outputs_open()) {
+		signal(sig, SIG_DFL);
+		raise(sig);
+		return;
+	}
 	stop_requested = 1;
 }
+
+/* The frame loop turns: from now on a stop is a clean one. A sink of mvod run's own. */
+static void loop_runs(void *ctx, bool reopen)
+{
+	(void)ctx;
+	(void)reopen;
+	running = 1;
+}
+
+static const struct mvod_sink_ops running_ops = {.name = "running", .between = loop_runs};
 
 static void on_hup(int sig)
 {
@@ -272,6 +292,9 @@ static int run(struct mvod_config *cfg)
 	struct mvod_run_summary sum;
 	int ret = mvod_run(&cfg->run, ipc, &stop_requested, &sum);
 	mvod_ipc_destroy(ipc);
+	struct mvod_sink mark = {&running_ops, NULL};
+	cfg->run.sinks = &mark;
+	cfg->run.n_sinks = 1;
 	if (!cfg->quiet && !ret)
 		print_summary(cfg, &sum);
 	if (ret && sum.calib_failed) /* systemctl status shows it beside "status=3" */

@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -209,6 +210,14 @@ int mvod_output_check(const char *what, const char *path, char *target, size_t t
 
 /* --- stream outputs --- */
 
+/* Stream outputs open now, read by signal handlers. */
+static volatile sig_atomic_t streams_open;
+
+bool mvod_outputs_open(void)
+{
+	return streams_open > 0;
+}
+
 struct mvod_output {
 	int fd;
 	int error;             /* the first failure, returned again at close */
@@ -279,6 +288,7 @@ int mvod_output_open(const char *what, const char *path, struct mvod_output **ou
 		return ret;
 	}
 	o->truncate_pending = o->regular;
+	streams_open++;
 	*out = o;
 	return 0;
 }
@@ -347,5 +357,6 @@ int mvod_output_close(struct mvod_output *o)
 	int ret = sync_close(o->fd);
 	ret = o->error ? o->error : ret;
 	free(o);
+	streams_open--;
 	return ret;
 }
