@@ -308,23 +308,23 @@ static double times_fps(const int64_t *t, size_t n)
 }
 
 /*
- * Every frame and times.txt (NULL for a list: its index file is read through mvod_read_file,
- * which notes it) are inputs: no output of this process may be one (util/output.h).
+ * Every frame is an input: no output of this process may be one (util/output.h). Noted here,
+ * at open, so that reading one allocates nothing (MVOD_INPUT_NOTED); times.txt and a dataset's
+ * index are noted by the line reader that reads them.
  */
-static int note_inputs(const struct mvod_images *im, const char *times_path, char *err,
-		       size_t errlen)
+static int note_frames(const struct mvod_images *im, char *err, size_t errlen)
 {
-	const char *name = times_path;
-	int ret = times_path ? mvod_input_note(times_path) : 0;
-	for (size_t i = 0; i < im->n && !ret; i++)
-		ret = mvod_input_note(name = im->paths[i]);
-	return ret ? mvod_errf(err, errlen, ret, "%s: %s", name, strerror(-ret)) : 0;
+	int ret = 0;
+	size_t i = 0;
+	for (; i < im->n && !ret; i++)
+		ret = mvod_input_note(im->paths[i]);
+	return ret ? mvod_errf(err, errlen, ret, "%s: %s", im->paths[i - 1], strerror(-ret)) : 0;
 }
 
 /* What every way of opening ends with: inputs noted, the first image decoded, info filled in. */
-static int start(struct mvod_images *im, const char *times_path, char *err, size_t errlen)
+static int start(struct mvod_images *im, char *err, size_t errlen)
 {
-	int ret = note_inputs(im, times_path, err, errlen);
+	int ret = note_frames(im, err, errlen);
 	if (ret >= 0)
 		ret = load_first(im, err, errlen);
 	if (ret < 0)
@@ -344,7 +344,7 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
 	ret = load_times(im, times_path, err, errlen);
 	if (ret < 0 && ret != -ENOENT)
 		goto fail;
-	ret = start(im, times_path, err, errlen);
+	ret = start(im, err, errlen);
 	if (ret < 0)
 		goto fail;
 	im->info.times_assumed = !im->times_us;
@@ -360,7 +360,7 @@ int mvod_images_open_list(struct mvod_images *im, char **paths, size_t n, int64_
 	im->paths = paths;
 	im->n = n;
 	im->times_us = times_us;
-	int ret = start(im, NULL, err, errlen);
+	int ret = start(im, err, errlen);
 	if (ret < 0)
 		mvod_images_close(im);
 	return ret;
