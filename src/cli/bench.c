@@ -101,7 +101,8 @@ static void usage(FILE *out)
 "  mvod bench --source kitti:data/sequences/07 --gt data/poses/07.txt --scale gt \\\n"
 "       --mode twoview --sweep 'detector=orb,sift;matcher=bf-cross,bf-ratio;features=1000,3000'\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a run-time fault, 2 on a usage or configuration error (as\n"
+"mvod run's: a ground truth or calibration that cannot serve, an output refused at start).\n");
 }
 
 /* The table: one column list for Markdown and CSV. */
@@ -754,6 +755,7 @@ static int run_plots(const struct bench *b, const struct collect *c, struct whol
 	return ret;
 }
 
+/* One run and its row: the exit status (cli_run_status for the run's own failures). */
 static int bench_one(const struct bench *b)
 {
 	struct collect c = {0};
@@ -765,6 +767,7 @@ static int bench_one(const struct bench *b)
 	struct whole_run w = {0};
 	struct row row;
 	int ret = mvod_run(&o, NULL, NULL, &s);
+	int status = cli_run_status(ret, &s);
 	if (!ret && c.n < 2) {
 		LOG(ERROR, "%s: %d frame(s): a benchmark needs at least two", o.source, c.n);
 		ret = -ENODATA;
@@ -786,7 +789,7 @@ static int bench_one(const struct bench *b)
 	free(w.buf);
 	free(c.est);
 	free(c.gt);
-	return ret;
+	return status ? status : ret ? EXIT_FAILURE : EXIT_SUCCESS;
 }
 
 /* --- the sweep --- */
@@ -1006,8 +1009,12 @@ int mvod_cmd_bench(int argc, char **argv)
 	}
 	cli_quiet_libraries();
 	ret = check_outputs(&b);
-	if (!ret)
-		ret = b.grid ? bench_sweep(&b) : bench_one(&b);
+	if (ret)
+		ret = ret == -ENOMEM ? EXIT_FAILURE : EXIT_USAGE;
+	else if (b.grid)
+		ret = bench_sweep(&b) ? EXIT_FAILURE : EXIT_SUCCESS;
+	else
+		ret = bench_one(&b);
 	bench_free(&b);
-	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
+	return ret;
 }

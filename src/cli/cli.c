@@ -12,6 +12,7 @@
 #include "mvod/board.h"
 #include "mvod/capture.h"
 #include "mvod/log.h"
+#include "mvod/pipeline.h"
 #include "util/output.h"
 
 const char *cli_prog = "mvod";
@@ -106,6 +107,14 @@ int cli_check_writable(const char *opt, const char *path)
 	if (ret)
 		fprintf(stderr, "%s: %s\n", cli_prog, err);
 	return ret;
+}
+
+int cli_run_status(int ret, const struct mvod_run_summary *s)
+{
+	if (!ret)
+		return EXIT_SUCCESS;
+	/* An unknown scheme is the URI's fault, as everything the run found before a frame. */
+	return s->config_failed || ret == -EPROTONOSUPPORT ? EXIT_USAGE : EXIT_FAILURE;
 }
 
 void cli_usage_input(FILE *out)

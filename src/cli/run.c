@@ -137,8 +137,11 @@ static void usage(FILE *out)
 "       --trajectory out.kitti --format kitti --plot out.png --lcm-url memq://\n"
 "  mvod --config /etc/mvod/mvod.conf --log-level debug --print-config\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error, 3 when the\n"
-"calibration is missing, unreadable or does not fit the camera (the service then stops).\n");
+"Exit status: 0 on success; 1 on a run-time fault, which a restart may fix (a camera\n"
+"absent, a write that failed, a source that broke off); 2 on a usage or configuration\n"
+"error, which only an edit fixes (a bad flag or config file; a calibration, ground truth\n"
+"or speed source that cannot serve; an output refused at start). The service does not\n"
+"restart on 2.\n");
 }
 
 enum run_opt_id { OPT_CONFIG = CLI_OPT_OWN, OPT_PRINT_CONFIG, OPT_LIST_CAMERAS };
@@ -289,19 +292,22 @@ static int run(struct mvod_config *cfg)
 	/* --scale external reads speed where mvod publishes unless told otherwise. */
 	if (!cfg->run.speed_url && cfg->lcm_enabled)
 		cfg->run.speed_url = cfg->lcm_url ? cfg->lcm_url : "";
-	struct mvod_run_summary sum;
-	int ret = mvod_run(&cfg->run, ipc, &stop_requested, &sum);
-	mvod_ipc_destroy(ipc);
 	struct mvod_sink mark = {&running_ops, NULL};
 	cfg->run.sinks = &mark;
 	cfg->run.n_sinks = 1;
+	struct mvod_run_summary sum;
+	int ret = mvod_run(&cfg->run, ipc, &stop_requested, &sum);
+	mvod_ipc_destroy(ipc);
 	if (!cfg->quiet && !ret)
 		print_summary(cfg, &sum);
-	if (ret && sum.calib_failed) /* systemctl status shows it beside "status=3" */
+	if (ret && sum.calib_failed) /* systemctl status shows it beside "status=2" */
 		mvod_notify_status(true, "stopped: the calibration %s is unusable (see the log): "
 					 "fix [calibration] file, then restart",
 				   cfg->run.calib ? cfg->run.calib : "(none given)");
-	return !ret ? EXIT_SUCCESS : sum.calib_failed ? EXIT_CONFIG : EXIT_FAILURE;
+	else if (ret && sum.config_failed)
+		mvod_notify_status(true, "stopped: the configuration cannot run (see the log): "
+					 "fix it, then restart");
+	return cli_run_status(ret, &sum);
 }
 
 int mvod_cmd_run(int argc, char **argv)

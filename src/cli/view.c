@@ -73,7 +73,8 @@ static void usage(FILE *out)
 "  mvod view --lcm-url 'udpm://239.255.76.67:7667?ttl=0'\n"
 "  mvod view --lcm-url 'file:///tmp/run.lcmlog?mode=r&speed=0' --png path.png --every 100\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a run-time fault, 2 on a usage error (--png refused at\n"
+"start too).\n");
 }
 
 enum view_opt_id {
@@ -401,7 +402,7 @@ int mvod_cmd_view(int argc, char **argv)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	if (c.png && (note_log(c.url ? c.url : getenv("LCM_DEFAULT_URL")) ||
 		      cli_check_writable("--png", c.png)))
-		return EXIT_FAILURE;
+		return EXIT_USAGE;
 	/* No SA_RESTART: the signal interrupts LCM's wait at once. */
 	struct sigaction sa = {.sa_handler = on_signal};
 	sigaction(SIGINT, &sa, NULL);

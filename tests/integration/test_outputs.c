@@ -173,7 +173,7 @@ static void refuse_input(const struct input_case *c)
 	argv[n] = NULL;
 	backup(c->path);
 	assert_int_equal(harness_run(argv, &r), 0);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(c->path);
 }
 
@@ -195,10 +195,10 @@ static void test_output_is_input(void **state)
 	/* Other commands: calib-convert OUT, bench --csv. */
 	struct run_result r;
 	mvod(&r, "calib-convert", calib, calib, NULL);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(calib);
 	mvod(&r, "bench", "--source", images, "--calib", calib, "--gt", gt, "--csv", gt, NULL);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(gt);
 	/* mvod view --png over the log it reads. */
 	char log_url[640];
@@ -208,7 +208,7 @@ static void test_output_is_input(void **state)
 	assert_int_equal(r.status, 0);
 	backup(lcmlog);
 	mvod(&r, "view", "--lcm-url", log_url, "--png", lcmlog, NULL);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(lcmlog);
 }
 
@@ -231,7 +231,7 @@ static void test_failed_start_keeps_outputs(void **state)
 	expect_fail(&r, 1, "nonexistent-typo");
 	mvod(&r, "--source", images, "--calib", "/nonexistent-calib.json", "--trajectory", traj,
 	     "--lcm-url", url, NULL);
-	expect_fail(&r, 3, "nonexistent-calib.json"); /* 3: the calibration */
+	expect_fail(&r, 2, "nonexistent-calib.json"); /* 2: the calibration */
 	mvod(&r, "--source", images, "--calib", calib, "--gt", bad_gt, "--scale", "gt",
 	     "--trajectory", traj, "--lcm-url", url, NULL);
 	expect_fail(&r, 1, "frame 0");
@@ -259,9 +259,9 @@ static void test_two_instances(void **state)
 	/* Stopped mid-run, holding its locks, while the others try; then it goes on. */
 	assert_int_equal(kill(first, SIGSTOP), 0);
 	mvod(&r, "--source", images, "--calib", calib, "--trajectory", traj, "--lcm-url", url2, NULL);
-	expect_fail(&r, 1, "is locked by another process");
+	expect_fail(&r, 2, "is locked by another process");
 	mvod(&r, "--source", images, "--calib", calib, "--trajectory", traj2, "--lcm-url", url, NULL);
-	expect_fail(&r, 1, "LCM log");
+	expect_fail(&r, 2, "LCM log");
 	assert_true(strstr(r.err, "is locked by another process") != NULL);
 	assert_int_equal(kill(first, SIGCONT), 0);
 	assert_int_equal(harness_wait(first, &status), 1);
@@ -343,7 +343,7 @@ static void test_fifo_without_peer(void **state)
 	unlink(fifo);
 	assert_int_equal(mkfifo(fifo, 0600), 0);
 	mvod(&r, "--source", images, "--calib", calib, "--no-lcm", "--trajectory", fifo, NULL);
-	expect_fail(&r, 1, "is a FIFO that no process reads");
+	expect_fail(&r, 2, "is a FIFO that no process reads");
 	mvod(&r, "--source", images, "--config", fifo, "--no-lcm", NULL);
 	expect_fail(&r, 2, "is a FIFO that no process writes into");
 	assert_int_equal(file_type(fifo), S_IFIFO);
