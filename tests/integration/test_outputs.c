@@ -212,6 +212,108 @@ static void test_output_is_input(void **state)
 	assert_unchanged(lcmlog);
 }
 
+/* --- one file by two names --- */
+
+/*
+ * The names an input and an output may share a file by, made next to input: a symlink to it,
+ * a hard link to it, and a path through ".." (into the folder .., back out by name).
+ */
+struct aliases {
+	char link[600], hard[600], dotdot[700];
+};
+
+static void make_aliases(const char *input, const char *tag, struct aliases *a)
+{
+	const char *slash = strrchr(input, '/');
+	snprintf(a->link, sizeof(a->link), "%s/%s.link", harness_tmpdir(), tag);
+	snprintf(a->hard, sizeof(a->hard), "%s/%s.hard", harness_tmpdir(), tag);
+	/* DIR/name as DIR/../BASE/name, BASE the last component of DIR. */
+	const char *base = slash - 1;
+	while (base > input && *base != '/')
+		base--;
+	snprintf(a->dotdot, sizeof(a->dotdot), "%.*s/..%.*s", (int)(slash - input), input,
+		 (int)strlen(base), base);
+	unlink(a->link);
+	unlink(a->hard);
+	assert_int_equal(symlink(input, a->link), 0);
+	assert_int_equal(link(input, a->hard), 0);
+}
+
+/*
+ * mvod ARGS... where "IN" stands for the input's name and "OUT" for the output's: refused
+ * with 2 before any work, the input byte for byte as it was.
+ */
+static void refuse_alias(const char *input, const char *in, const char *out, const char *const *args)
+{
+	char *argv[24] = {(char *)harness_bin("MVOD")};
+	int n = 1;
+	for (; *args && n < 23; args++)
+		argv[n++] = (char *)(strcmp(*args, "IN") == 0 ? in : strcmp(*args, "OUT") == 0 ? out
+											 : *args);
+	argv[n] = NULL;
+	struct run_result r;
+	backup(input);
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (r.status != 2 || !strstr(r.err, "is a file this run reads"))
+		fail_msg("%s as %s, %s as %s: expected exit 2 and a refusal, got %d: %s%s", input,
+			 in, input, out, r.status, r.out, r.err);
+	assert_unchanged(input);
+}
+
+/* Each way of naming one file twice, for the command args: input by an alias, output by its
+ * real path; the reverse; a hard link; a ".." path. */
+static void refuse_aliases(const char *input, const char *tag, const char *const *args)
+{
+	struct aliases a;
+	make_aliases(input, tag, &a);
+	refuse_alias(input, a.link, input, args);
+	refuse_alias(input, input, a.link, args);
+	refuse_alias(input, input, a.hard, args);
+	refuse_alias(input, a.hard, input, args);
+	refuse_alias(input, input, a.dotdot, args);
+	refuse_alias(input, a.dotdot, input, args);
+}
+
+/*
+ * An output that is an input, however each is named, for every command that writes: the
+ * tests before named the input by its real path only.
+ */
+static void test_aliases(void **state)
+{
+	(void)state;
+	refuse_aliases(calib, "calib", (const char *const[]){"--source", images, "--calib", "IN",
+		       "--no-lcm", "--trajectory", "OUT", NULL});
+	refuse_aliases(gt, "gt", (const char *const[]){"--source", images, "--calib", calib, "--gt",
+		       "IN", "--no-lcm", "--plot", "OUT", NULL});
+	refuse_aliases(gt, "bench", (const char *const[]){"bench", "--source", images, "--calib",
+		       calib, "--gt", "IN", "--csv", "OUT", NULL});
+	refuse_aliases(calib, "convert", (const char *const[]){"calib-convert", "--to", "mvod", "IN",
+		       "OUT", NULL});
+	/* calibrate: --out naming one of the frames it reads (the source by a folder's name). */
+	char dir[512], src[600], first[600];
+	snprintf(dir, sizeof(dir), "%s/alias-board", harness_tmpdir());
+	char *synth[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", dir, "--board", BOARD, "--views",
+			 "12", "--format", "png", "--size", "320x240", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(synth, &r), 0);
+	assert_int_equal(r.status, 0);
+	snprintf(src, sizeof(src), "images:%s/images", dir);
+	snprintf(first, sizeof(first), "%s/images/000003.png", dir);
+	struct aliases a;
+	make_aliases(first, "frame", &a); /* outside the folder: read as no frame */
+	const char *const outs[] = {first, a.link, a.hard, a.dotdot};
+	for (size_t i = 0; i < sizeof(outs) / sizeof(outs[0]); i++)
+		refuse_alias(first, NULL, outs[i], (const char *const[]){"calibrate", "--source", src,
+			     "--board", BOARD, "--out", "OUT", NULL});
+	/* The source's folder by a link, the frame named by its real path. */
+	char linkdir[600], linksrc[700];
+	snprintf(linkdir, sizeof(linkdir), "%s/board-link", harness_tmpdir());
+	assert_int_equal(symlink(dir, linkdir), 0);
+	snprintf(linksrc, sizeof(linksrc), "images:%s/images", linkdir);
+	refuse_alias(first, NULL, first, (const char *const[]){"calibrate", "--source", linksrc,
+		     "--board", BOARD, "--out", "OUT", NULL});
+}
+
 /* --- a failed start --- */
 
 static void test_failed_start_keeps_outputs(void **state)
@@ -606,6 +708,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_output_is_input),
+		cmocka_unit_test(test_aliases),
 		cmocka_unit_test(test_failed_start_keeps_outputs),
 		cmocka_unit_test(test_two_instances),
 		cmocka_unit_test(test_symlink_stays_a_link),
