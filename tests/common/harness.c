@@ -1,5 +1,6 @@
 #include "harness.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -11,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -184,6 +186,23 @@ int harness_run_reader_gone(char *const argv[], const char *err_path, int *statu
 	pid_t pid = spawn(argv, fds[1], err_path);
 	close(fds[1]);
 	return harness_wait(pid, status);
+}
+
+bool harness_holds_open(pid_t pid, const char *path)
+{
+	struct stat want, st;
+	char dir[64], fd_path[600];
+	assert_int_equal(stat(path, &want), 0);
+	snprintf(dir, sizeof(dir), "/proc/%d/fd", (int)pid);
+	DIR *d = opendir(dir);
+	bool found = false;
+	for (struct dirent *e = d ? readdir(d) : NULL; e && !found; e = readdir(d)) {
+		snprintf(fd_path, sizeof(fd_path), "%s/%s", dir, e->d_name);
+		found = stat(fd_path, &st) == 0 && st.st_dev == want.st_dev && st.st_ino == want.st_ino;
+	}
+	if (d)
+		closedir(d);
+	return found;
 }
 
 int harness_wait(pid_t pid, int *status)

@@ -509,24 +509,6 @@ static void test_mono_negative_principal_point(void **state)
 	mvod_source_close(src);
 }
 
-/* Whether pid has path open (same device and inode). */
-static bool holds_open(pid_t pid, const char *path)
-{
-	struct stat want, st;
-	char dir[64], fd_path[600];
-	assert_int_equal(stat(path, &want), 0);
-	snprintf(dir, sizeof(dir), "/proc/%d/fd", (int)pid);
-	DIR *d = opendir(dir);
-	bool found = false;
-	for (struct dirent *e = d ? readdir(d) : NULL; e && !found; e = readdir(d)) {
-		snprintf(fd_path, sizeof(fd_path), "%s/%s", dir, e->d_name);
-		found = stat(fd_path, &st) == 0 && st.st_dev == want.st_dev && st.st_ino == want.st_ino;
-	}
-	if (d)
-		closedir(d);
-	return found;
-}
-
 /*
  * Class 3: a stop is honoured while mvod starts. Blocked reading a --config FIFO that never
  * delivers (as in a libyaml parse of minutes), the first SIGTERM set a flag nobody read.
@@ -544,7 +526,7 @@ static void test_stop_during_start_up(void **state)
 			"--calib", calib, "--no-lcm", NULL};
 	pid_t pid = harness_spawn(argv, NULL, NULL);
 	int st = 0;
-	for (int i = 0; !holds_open(pid, fifo); i++) {
+	for (int i = 0; !harness_holds_open(pid, fifo); i++) {
 		if (waitpid(pid, &st, WNOHANG) == pid || i == BOUND_S * 100)
 			fail_msg("mvod ended (%d) or never opened its configuration", st);
 		usleep(10000);

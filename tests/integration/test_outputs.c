@@ -212,6 +212,17 @@ static void test_output_is_input(void **state)
 	assert_unchanged(lcmlog);
 }
 
+/* views renders of BOARD, 320x240 PNGs, in the test's folder name; its path into dir. */
+static void synth_board(const char *name, const char *views, char *dir, size_t len)
+{
+	snprintf(dir, len, "%s/%s", harness_tmpdir(), name);
+	char *synth[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", dir, "--board", BOARD, "--views",
+			 (char *)views, "--format", "png", "--size", "320x240", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(synth, &r), 0);
+	assert_int_equal(r.status, 0);
+}
+
 /* --- one file by two names --- */
 
 /*
@@ -291,12 +302,7 @@ static void test_aliases(void **state)
 		       "OUT", NULL});
 	/* calibrate: --out naming one of the frames it reads (the source by a folder's name). */
 	char dir[512], src[600], first[600];
-	snprintf(dir, sizeof(dir), "%s/alias-board", harness_tmpdir());
-	char *synth[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", dir, "--board", BOARD, "--views",
-			 "12", "--format", "png", "--size", "320x240", NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(synth, &r), 0);
-	assert_int_equal(r.status, 0);
+	synth_board("alias-board", "12", dir, sizeof(dir));
 	snprintf(src, sizeof(src), "images:%s/images", dir);
 	snprintf(first, sizeof(first), "%s/images/000003.png", dir);
 	struct aliases a;
@@ -453,24 +459,6 @@ static void test_fifo_without_peer(void **state)
 
 /* --- SIGHUP at start-up --- */
 
-/* Whether pid has path open (same device and inode). */
-static bool holds_open(pid_t pid, const char *path)
-{
-	struct stat want, st;
-	char dir[64], fd_path[600];
-	assert_int_equal(stat(path, &want), 0);
-	snprintf(dir, sizeof(dir), "/proc/%d/fd", (int)pid);
-	DIR *d = opendir(dir);
-	bool found = false;
-	for (struct dirent *e = d ? readdir(d) : NULL; e && !found; e = readdir(d)) {
-		snprintf(fd_path, sizeof(fd_path), "%s/%s", dir, e->d_name);
-		found = stat(fd_path, &st) == 0 && st.st_dev == want.st_dev && st.st_ino == want.st_ino;
-	}
-	if (d)
-		closedir(d);
-	return found;
-}
-
 /*
  * mvod reads its configuration from a FIFO this test holds: it is blocked in start-up, before
  * any library or source loads, when SIGHUP comes. It must live on and run.
@@ -493,7 +481,7 @@ static void test_sighup_at_start(void **state)
 	snprintf(exe, sizeof(exe), "/proc/%d/exe", (int)pid);
 	assert_non_null(realpath(harness_bin("MVOD"), want));
 	/* mvod itself, not the forked test before exec (which still holds the test's end). */
-	for (ssize_t n = 0; n <= 0 || strcmp(self, want) != 0 || !holds_open(pid, fifo);) {
+	for (ssize_t n = 0; n <= 0 || strcmp(self, want) != 0 || !harness_holds_open(pid, fifo);) {
 		n = readlink(exe, self, sizeof(self) - 1);
 		self[n > 0 ? n : 0] = '\0';
 		if (waitpid(pid, &st, WNOHANG) == pid)
@@ -665,12 +653,7 @@ static void test_calibrate_interrupted(void **state)
 	(void)state;
 	char dir[512], src[600], out[512], report[512], err_path[512], text[4096];
 	struct stat st;
-	snprintf(dir, sizeof(dir), "%s/board", harness_tmpdir());
-	char *synth[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", dir, "--board", BOARD, "--views",
-			 "40", "--format", "png", "--size", "320x240", NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(synth, &r), 0);
-	assert_int_equal(r.status, 0);
+	synth_board("board", "40", dir, sizeof(dir));
 	snprintf(src, sizeof(src), "images:%s/images", dir);
 	snprintf(out, sizeof(out), "%s/good.json", harness_tmpdir());
 	snprintf(report, sizeof(report), "%s/good.png", harness_tmpdir());
