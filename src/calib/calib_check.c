@@ -111,8 +111,8 @@ static int check_lens(const struct mvod_camera *c, char *err, size_t errlen)
  */
 static int check_numbers(const struct mvod_camera *c, char *err, size_t errlen)
 {
-	static const char *const opencv[MVOD_MAX_DIST] = {"k1", "k2", "p1", "p2", "k3", "k4",
-							  "k5", "k6", "s1", "s2", "s3", "s4", "tx", "ty"};
+	static const char *const opencv[MVOD_MAX_DIST] = {
+		"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tx", "ty"};
 	static const char *const kb4[4] = {"k1", "k2", "k3", "k4"};
 	for (int i = 0; i < c->n_dist; i++)
 		if (!isfinite(c->dist[i]))

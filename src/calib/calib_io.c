@@ -327,8 +327,8 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 		     char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", MVOD_INPUT_STREAM, &text,
-				 NULL, err, errlen);
+	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", MVOD_INPUT_STREAM,
+				 &text, NULL, err, errlen);
 	if (ret)
 		return ret;
 	/* A UTF-8 byte order mark (Windows editors write one) is no part of the text. */

@@ -843,8 +843,9 @@ static int split_row(void *ctx, char *line, size_t lineno, char *err, size_t err
 	for (char *save, *t = strtok_r(line, ",", &save); t && c < NCOLS;
 	     t = strtok_r(NULL, ",", &save))
 		snprintf(r->f[c++], sizeof(r->f[0]), "%s", t);
-	return c == NCOLS ? 1 : mvod_errf(err, errlen, -EINVAL, "line %zu: %d cells, not %d", lineno,
-					  c, NCOLS);
+	return c == NCOLS ? 1
+			  : mvod_errf(err, errlen, -EINVAL, "line %zu: %d cells, not %d", lineno, c,
+				      NCOLS);
 }
 
 static int read_row(const char *path, struct row *r)

@@ -27,10 +27,10 @@ int mvod_lcmlog_check(int fd, struct mvod_lcmlog_check *out);
 /*
  * What every reader of a log (mvod view, --speed-url file://) does before LCM reads it:
  * opens path through the input path (util/input.h: noted as an input, so no output of the
- * run may be it; a regular file only) and checks the log. 0 when LCM can read it safely: sound, or only cut short at its end
- * (out->cut; the caller may warn). Else a one-line reason naming path in err and -EIO when it
- * is corrupt (where, and the truncate that keeps the intact events), -ENODATA when it holds
- * no whole event, -errno when it cannot be read.
+ * run may be it; a regular file only) and checks the log. 0 when LCM can read it safely:
+ * sound, or only cut short at its end (out->cut; the caller may warn). Else a one-line
+ * reason naming path in err and -EIO when it is corrupt (where, and the truncate that keeps
+ * the intact events), -ENODATA when it holds no whole event, -errno when it cannot be read.
  */
 int mvod_lcmlog_vet(const char *path, struct mvod_lcmlog_check *out, char *err, size_t errlen);
 

@@ -132,9 +132,9 @@ int mvod_pose_from_quat(const double t[3], const double q[4], struct mvod_pose *
 	int ret = check_position(t, why, whylen);
 	double len = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
 	if (!ret && !(fabs(len - 1) <= MVOD_POSE_UNIT_TOL))
-		ret = mvod_errf(why, whylen, -EINVAL, "quaternion (qx qy qz qw) = (%g %g %g %g) has "
-				"length %g, not 1 (within %g): no rotation", q[1], q[2], q[3], q[0],
-				len, MVOD_POSE_UNIT_TOL);
+		ret = mvod_errf(why, whylen, -EINVAL, "quaternion (qx qy qz qw) = (%g %g %g %g) "
+				"has length %g, not 1 (within %g): no rotation", q[1], q[2], q[3],
+				q[0], len, MVOD_POSE_UNIT_TOL);
 	if (ret)
 		return ret;
 	memcpy(p->t, t, sizeof(p->t));
@@ -156,8 +156,8 @@ int mvod_pose_from_matrix(const double rt[12], struct mvod_pose *p, char *why, s
 		off = fmax(off, fabs(RtR[k] - (k % 4 == 0)));
 	/* A nan anywhere in R makes det nan, which no comparison passes. */
 	if (!ret && !(off <= MVOD_POSE_UNIT_TOL && det > 0))
-		ret = mvod_errf(why, whylen, -EINVAL, "rotation [%g %g %g; %g %g %g; %g %g %g] is no "
-				"rotation: R^T R is %g off the identity (within %g), det R = %g",
+		ret = mvod_errf(why, whylen, -EINVAL, "rotation [%g %g %g; %g %g %g; %g %g %g] is "
+				"no rotation: R^T R is %g off the identity (within %g), det R = %g",
 				m.R[0], m.R[1], m.R[2], m.R[3], m.R[4], m.R[5], m.R[6], m.R[7],
 				m.R[8], off, MVOD_POSE_UNIT_TOL, det);
 	if (!ret)
@@ -244,7 +244,7 @@ static int load_line(void *ctx, char *line, size_t lineno, char *err, size_t err
 
 int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen)
 {
-	/* Ground truth is an input: the line reader notes it, so no output of this run may be it. */
+	/* Ground truth is an input: the line reader notes it, so no output of the run may be it. */
 	struct loader l = {.path = path};
 	int ret = mvod_lines_each(path, "trajectory", load_line, &l, err, errlen);
 	if (!ret && l.tr.n == 0)

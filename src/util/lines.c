@@ -50,9 +50,9 @@ static int check_text(const struct mvod_lines *l, const char *s, size_t n, char 
 	for (size_t i = 0; i < n; i++) {
 		unsigned char c = (unsigned char)s[i];
 		if (c < 0x20 && (c < '\t' || c > '\r'))
-			return mvod_errf(err, errlen, -EILSEQ, "%s line %zu: byte 0x%02x at column "
-					 "%zu is no text: not a %s", l->in.path, l->lineno, c, i + 1,
-					 l->in.what);
+			return mvod_errf(err, errlen, -EILSEQ, "%s line %zu: byte 0x%02x "
+					 "at column %zu is no text: not a %s", l->in.path,
+					 l->lineno, c, i + 1, l->in.what);
 	}
 	return 0;
 }
@@ -82,8 +82,8 @@ static int fill(struct mvod_lines *l, char *err, size_t errlen)
 	l->end -= l->start;
 	l->start = 0;
 	if (l->end == MVOD_LINE_MAX)
-		return mvod_errf(err, errlen, -E2BIG, "%s line %zu is longer than %d bytes: no line "
-				 "of a %s is (a binary or corrupt file?)", l->in.path,
+		return mvod_errf(err, errlen, -E2BIG, "%s line %zu is longer than %d bytes: no "
+				 "line of a %s is (a binary or corrupt file?)", l->in.path,
 				 l->lineno + 1, MVOD_LINE_MAX - 1, l->in.what);
 	ssize_t r = mvod_input_read(&l->in, l->buf + l->end, MVOD_LINE_MAX - l->end, err, errlen);
 	if (r < 0)

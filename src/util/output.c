@@ -148,8 +148,8 @@ static int kind_of(const char *what, const char *path, const struct stat *st,
 	if (is_input(st))
 		return mvod_errf(err, errlen, -EEXIST, "%s %s is a file this run reads (its source, a "
 				 "frame, times.txt, the calibration, the ground truth, the "
-				 "configuration, or an LCM log it replays or reads speed from): mvod "
-				 "never writes over its input; name another file", what, path);
+				 "configuration, or an LCM log it replays or reads speed from): "
+				 "mvod never writes over its input; name another file", what, path);
 	return 0;
 }
 

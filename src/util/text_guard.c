@@ -40,14 +40,16 @@ static int guard_yaml(const char *text, size_t len, char *err, size_t errlen)
 			break;
 		size_t line = e.start_mark.line + 1;
 		end = e.type == YAML_STREAM_END_EVENT;
-		if (e.type == YAML_SEQUENCE_START_EVENT || e.type == YAML_MAPPING_START_EVENT)
+		bool seq = e.type == YAML_SEQUENCE_START_EVENT;
+		bool map = e.type == YAML_MAPPING_START_EVENT;
+		if (seq || map)
 			ret = ++depth > MVOD_TEXT_MAX_DEPTH ? too_deep(line, err, errlen) : 0;
 		if (e.type == YAML_SEQUENCE_END_EVENT || e.type == YAML_MAPPING_END_EVENT)
 			depth--;
 		bool named = e.type == YAML_ALIAS_EVENT ||
 			     (e.type == YAML_SCALAR_EVENT && e.data.scalar.anchor) ||
-			     (e.type == YAML_SEQUENCE_START_EVENT && e.data.sequence_start.anchor) ||
-			     (e.type == YAML_MAPPING_START_EVENT && e.data.mapping_start.anchor);
+			     (seq && e.data.sequence_start.anchor) ||
+			     (map && e.data.mapping_start.anchor);
 		if (!ret && named && ++names > MVOD_TEXT_MAX_NAMES)
 			ret = too_many(line, "anchors and aliases", err, errlen);
 		yaml_event_delete(&e);
