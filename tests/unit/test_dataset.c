@@ -12,6 +12,8 @@
 
 #include <cmocka.h>
 
+#include "harness.h"
+
 #include "capture/dataset.h"
 
 static void test_parse_ns(void **state)
@@ -96,12 +98,36 @@ static void test_parse_pose(void **state)
 				    "than 1e+08 m from the origin"));
 }
 
+/*
+ * Frames of an index must be a microsecond apart at least, mvod's frame clock: 1000 and 1400
+ * ns were two frames at one time (fuzz/euroc_index).
+ */
+static void test_frames_a_microsecond_apart(void **state)
+{
+	(void)state;
+	struct mvod_ds_frames f = {0};
+	char err[512] = "";
+	const char *dir = harness_tmpdir();
+	harness_write_file(harness_tmp_path("1.png"), "");
+	harness_write_file(harness_tmp_path("2.png"), "");
+	assert_int_equal(mvod_ds_frames_add(&f, "data.csv", 1, dir, "1.png", 1000, err, sizeof(err)),
+			 0);
+	assert_int_equal(mvod_ds_frames_add(&f, "data.csv", 2, dir, "2.png", 1400, err, sizeof(err)),
+			 -EINVAL);
+	assert_non_null(strstr(err, "data.csv line 2: time 0.000001400 s is not after "
+				    "0.000001000 s of line 1: the frames (to the microsecond)"));
+	assert_int_equal(mvod_ds_frames_add(&f, "data.csv", 2, dir, "2.png", 1500, err, sizeof(err)),
+			 0);
+	mvod_ds_frames_free(&f);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_parse_ns),
 		cmocka_unit_test(test_parse_seconds),
 		cmocka_unit_test(test_parse_pose),
+		cmocka_unit_test(test_frames_a_microsecond_apart),
 	};
-	return cmocka_run_group_tests(tests, NULL, NULL);
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }
