@@ -209,10 +209,13 @@ static void make_datasets(void)
 				     "distortion_model: radial-tangential\n"
 				     "distortion_coefficients: [0, 0, 0, 0]\n";
 	put("euroc/mav0/cam0/sensor.yaml", sensor, sizeof(sensor) - 1);
-	put("euroc/mav0/cam0/data.csv", "1,1.png\n2,2.png\n3,3.png\n", 24);
-	put("tum/rgb.txt", "1.0 rgb/1.png\n2.0 rgb/2.png\n3.0 rgb/3.png\n", 42);
-	put("mono/camera.txt", "Pinhole 10 10 3.5 3.5 0\n8 8\ncrop\n8 8\n", 39);
-	put("kitti/calib.txt", "P0: 10 0 3.5 0 0 10 3.5 0 0 0 1 0\n", 35);
+	static const char *const texts[][2] = {
+		{"euroc/mav0/cam0/data.csv", "1000,1.png\n2000,2.png\n3000,3.png\n"},
+		{"tum/rgb.txt", "1.0 rgb/1.png\n2.0 rgb/2.png\n3.0 rgb/3.png\n"},
+		{"mono/camera.txt", "Pinhole 10 10 3.5 3.5 0\n8 8\ncrop\n8 8\n"},
+		{"kitti/calib.txt", "P0: 10 0 3.5 0 0 10 3.5 0 0 0 1 0\n"}};
+	for (size_t i = 0; i < sizeof(texts) / sizeof(texts[0]); i++)
+		put(texts[i][0], texts[i][1], strlen(texts[i][1]));
 }
 
 /*
