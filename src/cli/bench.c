@@ -986,14 +986,41 @@ out:
 }
 
 /*
- * Before any run, by the output policy: the tables may not be the ground truth (noted here,
- * as sweep children read it, not this process), a directory or a disk.
+ * --plots DIR: a folder (made at the end when it is not there yet) whose PNGs the output policy
+ * takes; a file there was refused only after the whole run.
+ */
+static int check_plots(const char *dir)
+{
+	static const char *const names[] = {"path-top.png", "path-side.png", "errors.png",
+					    "sweep.png"};
+	struct stat st;
+	if (stat(dir, &st) != 0)
+		return cli_check_writable("--plots", dir);
+	if (!S_ISDIR(st.st_mode)) {
+		fprintf(stderr, "%s: --plots %s is no folder: name a folder for the PNGs\n", cli_prog,
+			dir);
+		return -ENOTDIR;
+	}
+	char path[4096];
+	int ret = 0;
+	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]) && !ret; i++) {
+		snprintf(path, sizeof(path), "%s/%s", dir, names[i]);
+		ret = cli_check_writable("--plots", path);
+	}
+	return ret;
+}
+
+/*
+ * Before any run, by the output policy: the tables and plots may not be the ground truth
+ * (noted here, as sweep children read it, not this process), a directory or a disk.
  */
 static int check_outputs(const struct bench *b)
 {
 	if (b->cfg.run.gt && mvod_input_note(b->cfg.run.gt) == -ENOMEM)
 		return -ENOMEM;
 	if (b->csv && cli_check_writable("--csv", b->csv))
+		return -EINVAL;
+	if (b->plots && check_plots(b->plots))
 		return -EINVAL;
 	return b->report && cli_check_writable("--report", b->report) ? -EINVAL : 0;
 }

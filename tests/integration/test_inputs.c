@@ -435,6 +435,16 @@ static void test_plot_checked_at_start(void **state)
 	expect_refused(2, "plot.xyz: OpenCV writes no .xyz images", "bench", "--source", images,
 		       "--calib", calib, "--gt", gt, "--plot", xyz, NULL);
 	assert_int_equal(access(xyz, F_OK), -1);
+	/* bench --plots: a folder, whose PNGs are no input; a file there failed after the run. */
+	char plots[300], link[330];
+	snprintf(plots, sizeof(plots), "%s/plots", harness_tmpdir());
+	assert_int_equal(mkdir(plots, 0755), 0);
+	snprintf(link, sizeof(link), "%s/errors.png", plots);
+	assert_int_equal(symlink(gt, link), 0);
+	expect_refused(2, "errors.png is a file this run reads", "bench", "--source", images,
+		       "--calib", calib, "--gt", gt, "--plots", plots, NULL);
+	expect_refused(2, "--plots ", "bench", "--source", images, "--calib", calib, "--gt", gt,
+		       "--plots", gt, NULL);
 	/* The run never began: no frame was processed. */
 	struct run_result r;
 	char *argv[] = {(char *)harness_bin("MVOD"), "--source", images, "--calib", calib,
