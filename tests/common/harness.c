@@ -3,6 +3,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <poll.h>
 #include <signal.h>
@@ -188,7 +189,8 @@ int harness_run_reader_gone(char *const argv[], const char *err_path, int *statu
 	return harness_wait(pid, status);
 }
 
-bool harness_holds_open(pid_t pid, const char *path)
+/* Whether pid has path open (the same device and inode among its descriptors). */
+static bool holds_open(pid_t pid, const char *path)
 {
 	struct stat want, st;
 	char dir[64], fd_path[600];
@@ -203,6 +205,21 @@ bool harness_holds_open(pid_t pid, const char *path)
 	if (d)
 		closedir(d);
 	return found;
+}
+
+void harness_wait_open(pid_t pid, const char *path)
+{
+	char exe[64], self[PATH_MAX] = "", want[PATH_MAX];
+	snprintf(exe, sizeof(exe), "/proc/%d/exe", (int)pid);
+	assert_non_null(realpath(harness_bin("MVOD"), want));
+	int st;
+	for (ssize_t n = 0; n <= 0 || strcmp(self, want) != 0 || !holds_open(pid, path);) {
+		n = readlink(exe, self, sizeof(self) - 1);
+		self[n > 0 ? n : 0] = '\0';
+		if (waitpid(pid, &st, WNOHANG) == pid)
+			fail_msg("mvod ended (%d) before it opened %s", st, path);
+		usleep(1000);
+	}
 }
 
 int harness_wait(pid_t pid, int *status)

@@ -476,18 +476,7 @@ static void test_sighup_at_start(void **state)
 	char *argv[] = {(char *)harness_bin("MVOD"), "-q", "--config", fifo, "--source", images,
 			"--calib", calib, "--no-lcm", "--max-frames", "2", NULL};
 	pid_t pid = harness_spawn(argv, NULL, NULL);
-	int st;
-	char exe[64], self[PATH_MAX], want[PATH_MAX];
-	snprintf(exe, sizeof(exe), "/proc/%d/exe", (int)pid);
-	assert_non_null(realpath(harness_bin("MVOD"), want));
-	/* mvod itself, not the forked test before exec (which still holds the test's end). */
-	for (ssize_t n = 0; n <= 0 || strcmp(self, want) != 0 || !harness_holds_open(pid, fifo);) {
-		n = readlink(exe, self, sizeof(self) - 1);
-		self[n > 0 ? n : 0] = '\0';
-		if (waitpid(pid, &st, WNOHANG) == pid)
-			fail_msg("mvod ended (%d) before it opened its configuration", st);
-		usleep(1000);
-	}
+	harness_wait_open(pid, fifo);
 	assert_int_equal(kill(pid, SIGHUP), 0);
 	const char text[] = "[vo]\nfeatures = 1000\n";
 	assert_int_equal(write(hold, text, sizeof(text) - 1), (ssize_t)sizeof(text) - 1);
