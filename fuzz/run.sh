@@ -9,13 +9,14 @@
 set -eu
 exe=$1
 regress=$2
+runs=${3:-50000} # the fixed-seed stage's runs (fuzz/meson.build)
 name=$(basename "$regress")
 corpus=corpus/$name
 if [ -n "${MVOD_FUZZ_SECONDS:-}" ]; then
 	budget="-max_total_time=$MVOD_FUZZ_SECONDS"
 else
 	rm -rf "$corpus" # what an earlier run found would change what this one does
-	budget="-seed=1 -runs=${MVOD_FUZZ_RUNS:-50000}"
+	budget="-seed=1 -runs=${MVOD_FUZZ_RUNS:-$runs}"
 fi
 mkdir -p "$corpus"
 # shellcheck disable=SC2086 # $budget is one or two options

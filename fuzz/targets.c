@@ -7,6 +7,7 @@
 #include <assert.h>
 #include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +20,7 @@
 #include <lcm/eventlog.h>
 
 #include "capture/euroc.h"
+#include "capture/image_header.h"
 #include "capture/png_grey.h"
 #include "capture/uri.h"
 #include "mvod/board.h"
@@ -28,6 +30,8 @@
 #include "mvod/traj.h"
 #include "ipc/log_check.h"
 #include "ipc/lcm_log.h"
+#include "mvod/capture.h"
+#include "util/lines.h"
 #include "util/output.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -140,6 +144,118 @@ static void check_target(enum mvod_output_kind kind, const char *target)
 }
 #endif
 
+#if defined(FUZZ_LINES)
+/* What the line reader handed out: each line text, shorter than its buffer, numbered in turn. */
+static int see_line(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
+{
+	size_t *last = ctx, n = strlen(line);
+	(void)err;
+	(void)errlen;
+	assert(lineno > *last && n < MVOD_LINE_MAX && !strchr(line, '\n'));
+	for (size_t i = 0; i < n; i++)
+		assert((unsigned char)line[i] >= 0x20 || (line[i] >= '\t' && line[i] <= '\r'));
+	*last = lineno;
+	return 0;
+}
+#endif
+
+#if defined(FUZZ_TIMES) || defined(FUZZ_EUROC_INDEX) || defined(FUZZ_TUM_INDEX) || \
+	defined(FUZZ_TUM_MONO_INDEX) || defined(FUZZ_KITTI_INDEX) || defined(FUZZ_GT_POSES)
+/*
+ * One folder per dataset layout, made once, each with three 8x8 frames (P5 bytes: OpenCV and
+ * the header reader go by content, not by name) and its fixed files; the fuzzed index or
+ * ground truth is written into it per input. Removed at exit.
+ */
+static char datasets[64];
+
+static void remove_datasets(void)
+{
+	char cmd[128];
+	snprintf(cmd, sizeof(cmd), "rm -rf '%s'", datasets);
+	assert(system(cmd) == 0);
+}
+
+static void put(const char *rel, const void *bytes, size_t len)
+{
+	char path[256];
+	snprintf(path, sizeof(path), "%s/%s", datasets, rel);
+	for (char *s = strchr(path + strlen(datasets) + 1, '/'); s; s = strchr(s + 1, '/')) {
+		*s = '\0';
+		mkdir(path, 0700);
+		*s = '/';
+	}
+	FILE *f = fopen(path, "wb");
+	assert(f && fwrite(bytes, 1, len, f) == len && fclose(f) == 0);
+}
+
+static void make_datasets(void)
+{
+	static const char frame[] = "P5\n8 8\n255\n"
+				    "0123456789abcdef0123456789abcdef0123456789abcdef0123456789abcdef";
+	static const char *const frames[] = {
+		"images/0.pgm", "images/1.pgm", "images/2.pgm", "euroc/mav0/cam0/data/1.png",
+		"euroc/mav0/cam0/data/2.png", "euroc/mav0/cam0/data/3.png", "tum/rgb/1.png",
+		"tum/rgb/2.png", "tum/rgb/3.png", "mono/images/00000.png", "mono/images/00001.png",
+		"mono/images/00002.png", "kitti/image_0/000000.png", "kitti/image_0/000001.png",
+		"kitti/image_0/000002.png"};
+	snprintf(datasets, sizeof(datasets), "/tmp/mvod-fuzz-datasets-XXXXXX");
+	assert(mkdtemp(datasets));
+	atexit(remove_datasets);
+	for (size_t i = 0; i < sizeof(frames) / sizeof(frames[0]); i++)
+		put(frames[i], frame, sizeof(frame) - 1);
+	static const char sensor[] = "sensor_type: camera\nT_BS:\n  cols: 4\n  rows: 4\n  data: [1, "
+				     "0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]\nresolution: [8, 8]\n"
+				     "camera_model: pinhole\nintrinsics: [10, 10, 3.5, 3.5]\n"
+				     "distortion_model: radial-tangential\n"
+				     "distortion_coefficients: [0, 0, 0, 0]\n";
+	put("euroc/mav0/cam0/sensor.yaml", sensor, sizeof(sensor) - 1);
+	static const char *const texts[][2] = {
+		{"euroc/mav0/cam0/data.csv", "1000,1.png\n2000,2.png\n3000,3.png\n"},
+		{"tum/rgb.txt", "1.0 rgb/1.png\n2.0 rgb/2.png\n3.0 rgb/3.png\n"},
+		{"mono/camera.txt", "Pinhole 10 10 3.5 3.5 0\n8 8\ncrop\n8 8\n"},
+		{"kitti/calib.txt", "P0: 10 0 3.5 0 0 10 3.5 0 0 0 1 0\n"}};
+	for (size_t i = 0; i < sizeof(texts) / sizeof(texts[0]); i++)
+		put(texts[i][0], texts[i][1], strlen(texts[i][1]));
+}
+
+/*
+ * The dataset in folder (scheme:DATASETS/folder) with rel (its index or ground truth) holding
+ * the input: opened, its frames' times increasing, the ground truth it carries (gt) poses that
+ * are poses. Every noted input is forgotten after, so the list does not grow with the runs.
+ */
+static int open_dataset(const char *scheme, const char *folder, const char *rel,
+			const uint8_t *data, size_t size, bool gt, char *err, size_t errlen)
+{
+	if (!datasets[0])
+		make_datasets();
+	put(rel, data, size);
+	char full[128];
+	snprintf(full, sizeof(full), "%s:%s/%s", scheme, datasets, folder);
+	struct mvod_source *src = NULL;
+	int ret = mvod_source_open(full, &src, err, errlen);
+	struct mvod_traj t = {0};
+	if (!ret && gt) {
+		char from[256];
+		ret = mvod_source_ground_truth(src, &t, from, sizeof(from), err, errlen);
+		for (int i = 0; !ret && i < t.n; i++)
+			assert(fabs(mvod_mat3_det(t.pose[i].R) - 1) < 1e-6 &&
+			       hypot(hypot(t.pose[i].t[0], t.pose[i].t[1]), t.pose[i].t[2]) <=
+				       2 * MVOD_POSE_MAX_M + 1);
+		mvod_traj_free(&t);
+		ret = ret == -ENOENT ? 0 : ret;
+	}
+	struct mvod_frame f;
+	for (int64_t last = INT64_MIN; !ret && mvod_source_read(src, &f) != -ENODATA;) {
+		assert(f.utime > last);
+		last = f.utime;
+	}
+	if (src)
+		mvod_source_close(src);
+	mvod_inputs_forget();
+	return ret;
+}
+#endif
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	char err[512] = "";
@@ -179,6 +295,36 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		assert(t.n > 0);
 		mvod_traj_free(&t);
 	}
+#elif defined(FUZZ_LINES)
+	size_t last = 0;
+	ret = mvod_lines_each(as_file(data, size), "fuzz file", see_line, &last, err, sizeof(err));
+	mvod_inputs_forget();
+#elif defined(FUZZ_IMAGE_HEADER)
+	/* A size of 1 or more, or none (-EINVAL, no reason: the caller names the file). */
+	int w = 0, h = 0;
+	int hret = mvod_image_header_size(data, size, &w, &h);
+	assert(hret == 0 ? w >= 1 && h >= 1 : hret == -EINVAL);
+	ret = 0;
+#elif defined(FUZZ_TIMES)
+	ret = open_dataset("images", "images", "images/times.txt", data, size, false, err,
+			   sizeof(err));
+#elif defined(FUZZ_EUROC_INDEX)
+	ret = open_dataset("euroc", "euroc", "euroc/mav0/cam0/data.csv", data, size, false, err,
+			   sizeof(err));
+#elif defined(FUZZ_TUM_INDEX)
+	ret = open_dataset("tum", "tum", "tum/rgb.txt", data, size, false, err, sizeof(err));
+#elif defined(FUZZ_TUM_MONO_INDEX)
+	ret = open_dataset("tum", "mono", "mono/times.txt", data, size, false, err, sizeof(err));
+#elif defined(FUZZ_KITTI_INDEX)
+	ret = open_dataset("kitti", "kitti", "kitti/times.txt", data, size, false, err,
+			   sizeof(err));
+#elif defined(FUZZ_GT_POSES)
+	/* The first byte picks the layout: EuRoC's body poses or TUM's camera poses. */
+	bool euroc = size > 0 && data[0] & 1;
+	ret = open_dataset(euroc ? "euroc" : "tum", euroc ? "euroc" : "tum",
+			   euroc ? "euroc/mav0/state_groundtruth_estimate0/data.csv"
+				 : "tum/groundtruth.txt",
+			   data + (size > 0), size - (size > 0), true, err, sizeof(err));
 #elif defined(FUZZ_BOARD)
 	struct mvod_board b;
 	char *s = as_string(data, size);

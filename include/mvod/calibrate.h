@@ -39,6 +39,14 @@ struct mvod_calib_opts {
 	volatile sig_atomic_t *stop;
 	/* The subcommand reading the views, naming its progress lines: "calibrate" (default), "mount". */
 	const char *command;
+	/*
+	 * Called once the source is open, so its files are noted as inputs, and before a frame is
+	 * read: the caller checks its outputs by the output policy (an --out naming a frame is
+	 * refused before the work, not after it). 0 to go on, or -errno with the reason in err,
+	 * which ends the reading. May be NULL; check_ctx is the caller's.
+	 */
+	int (*check_outputs)(void *check_ctx, char *err, size_t errlen);
+	void *check_ctx;
 };
 
 /* Fills the defaults above; source and board are left for the caller. */

@@ -77,6 +77,11 @@ int mvod_ipc_publish_status(struct mvod_ipc *ipc, const struct mvod_status *st);
  */
 struct _mvod_status2_t;
 void mvod_status_to_msg(const struct mvod_status *st, struct _mvod_status2_t *msg);
+/*
+ * A message's state byte as an enum mvod_run_state value (pipeline.h): itself when it is one,
+ * else MVOD_RUN_UNKNOWN (-1), so that no reader loads an out-of-range enum.
+ */
+int mvod_run_state_from_wire(int state);
 void mvod_status_from_msg(const struct _mvod_status2_t *msg, struct mvod_status *st);
 /*
  * A v1 message as its v2 type: the same fields, the new ones 0 (mvod view reads logs of
@@ -107,10 +112,11 @@ struct mvod_lcmlog_check {
 
 /*
  * What every reader of a log (mvod view, --speed-url file://) does before LCM reads it:
- * checks the log at path. 0 when LCM can read it safely: sound, or only cut short at its end
- * (out->cut; the caller may warn). Else a one-line reason naming path in err and -EIO when it
- * is corrupt (where, and the truncate that keeps the intact events), -ENODATA when it holds
- * no whole event, -errno when it cannot be read.
+ * opens path through the input path (util/input.h: noted as an input, so no output of the
+ * run may be it; a regular file only) and checks the log. 0 when LCM can read it safely:
+ * sound, or only cut short at its end (out->cut; the caller may warn). Else a one-line
+ * reason naming path in err and -EIO when it is corrupt (where, and the truncate that keeps
+ * the intact events), -ENODATA when it holds no whole event, -errno when it cannot be read.
  */
 int mvod_lcmlog_vet(const char *path, struct mvod_lcmlog_check *out, char *err, size_t errlen);
 

@@ -32,6 +32,13 @@ const char *mvod_plot_unit(bool metric);
 int mvod_plot_topdown(const char *path, const char *title, const double *est_xyz, int n_est,
 		      const double heading[9], const double *gt_xyz, int n_gt, const char *unit);
 
+/*
+ * Whether path names an image format OpenCV writes (.png, .jpg, .bmp, .tif, .ppm ...) by its
+ * extension, as mvod_plot_topdown and mvod_plot_chart need, before any work: 0, or -EINVAL
+ * with "what path: ..." in err (no extension, /dev/null, or one no encoder takes).
+ */
+int mvod_plot_check(const char *what, const char *path, char *err, size_t errlen);
+
 /* The size of that picture, in pixels. */
 #define MVOD_PLOT_WIDTH 1000
 #define MVOD_PLOT_HEIGHT 800

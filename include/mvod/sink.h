@@ -89,7 +89,10 @@ int mvod_sink_notify_create(struct mvod_sink *out);
  * does); gt_poses, the ground truth's pose count, sizes what that keeps.
  */
 int mvod_sink_eval_create(bool sim3, int gt_poses, struct mvod_sink *out);
-/* The --plot PNG of the evaluation's paths, written at finish; eval is borrowed. */
+/*
+ * The --plot PNG of the evaluation's paths, written at finish; eval is borrowed. A path whose
+ * extension names no image format (mvod_plot_check) is refused here, before the first frame.
+ */
 int mvod_sink_plot_create(const char *path, const char *source, bool gt_scale,
 			  const struct mvod_sink *eval, struct mvod_sink *out);
 

@@ -23,6 +23,12 @@ extern "C" {
 #define MVOD_SPEED_SAMPLES 256
 /* A speed beyond this (m/s) is refused as garbage. */
 #define MVOD_SPEED_MAX 100.0
+/*
+ * Sample times (utime, microseconds) are taken in [0, this]: 73 000 years, past any clock,
+ * and small enough that the difference of two times and of a time and a frame's never
+ * overflows int64 (a utime of +-(2^63 - 1) did: undefined behaviour, UBSan).
+ */
+#define MVOD_SPEED_MAX_UTIME (INT64_MAX / 4)
 
 struct mvod_speed;
 
@@ -46,7 +52,7 @@ int mvod_speed_odometer(struct mvod_speed *s, int64_t utime, double *metres);
 struct mvod_speed_counts {
 	int64_t accepted;
 	int64_t bad_type;  /* not an mvod.speed_t (its fingerprint differs) */
-	int64_t bad_time;  /* utime not after the previous sample's */
+	int64_t bad_time;  /* utime not after the previous sample's, or not in [0, MAX_UTIME] */
 	int64_t bad_value; /* speed or distance not finite, or |speed| > MVOD_SPEED_MAX */
 	int64_t last_bad_utime; /* the utime of the last one refused for its time */
 };

@@ -30,6 +30,12 @@ enum mvod_run_state {
 	MVOD_RUN_LOST = MVOD_STATE_LOST,
 	MVOD_RUN_SOURCE_DOWN = 4, /* a live source went away; the capture thread reopens it */
 	MVOD_RUN_STOPPING = 5,    /* the last status of a run */
+	/*
+	 * A state byte no value above (a newer sender's, a corrupt log) as a message reader
+	 * takes it (mvod_run_state_from_wire): loading the byte itself into the enum is undefined
+	 * in C++ (mvod view's drawing; UBSan's -fsanitize=enum).
+	 */
+	MVOD_RUN_UNKNOWN = -1,
 };
 const char *mvod_run_state_name(enum mvod_run_state s);
 
@@ -69,10 +75,16 @@ struct mvod_run_summary {
 	int64_t frames, tracked, held;
 	/*
 	 * The run did not start because of its camera model: the calibration is missing,
-	 * unreadable, malformed, of another image size, or absent where the source has none. An
-	 * edit of the configuration fixes it, a restart does not (the daemon's exit status 3).
+	 * unreadable, malformed, of another image size, or absent where the source has none.
 	 */
 	bool calib_failed;
+	/*
+	 * The run did not start because of its configuration: anything that failed after the
+	 * source opened and before the first frame but memory (the calibration, the ground
+	 * truth, --scale's height or speed, --frame, the front end for the image size, an output
+	 * the policy refuses). An edit fixes it, a restart does not (the daemon's exit status 2).
+	 */
+	bool config_failed;
 	enum mvod_frontend frontend; /* the front end that ran: --frontend auto resolved */
 	bool live;       /* frames came through the capture thread */
 	/* frames a live source produced that were not processed, the skipped ones apart */

@@ -49,6 +49,32 @@ struct mvod_traj {
 	enum mvod_traj_format format;
 };
 
+/*
+ * The one check of every pose that enters mvod (ground truth of any source, --gt, the poses
+ * mvod view receives): each number finite, the position at most MVOD_POSE_MAX_M from the
+ * origin, the rotation a unit quaternion or a rotation matrix to within MVOD_POSE_UNIT_TOL.
+ * A zero quaternion or an all-zero rotation made 39 of 40 trajectory lines "nan" (exit 0).
+ */
+/*
+ * Beyond any coordinate on Earth (geocentric ones reach 6.4e6 m, UTM northings 1e7 m), and
+ * where a double still holds the position to 15 nm.
+ */
+#define MVOD_POSE_MAX_M 1e8
+/*
+ * How far a quaternion's length, and each entry of R^T R - I, may be from a unit: 1 %. Tools
+ * print poses to 4 or more digits (TUM's ground truth: 4 decimals, within 2e-4; KITTI's: 6,
+ * within 1e-6); a column mix-up or a zero is off by far more.
+ */
+#define MVOD_POSE_UNIT_TOL 0.01
+/*
+ * t (metres) and a quaternion q = (w, x, y, z) into *p, normalised. -EINVAL with the reason
+ * in why ("quaternion (w x y z) = (0 0 0 0) has length 0, not 1") when they are no pose.
+ */
+int mvod_pose_from_quat(const double t[3], const double q[4], struct mvod_pose *p, char *why,
+			size_t whylen);
+/* A row-major 3x4 [R | t] into *p, as given; -EINVAL with the reason in why as above. */
+int mvod_pose_from_matrix(const double rt[12], struct mvod_pose *p, char *why, size_t whylen);
+
 /* Reads TUM or KITTI, told apart by the column count (8 or 12). -errno with a reason in err. */
 int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen);
 void mvod_traj_free(struct mvod_traj *traj);

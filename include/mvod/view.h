@@ -50,6 +50,9 @@ struct mvod_view {
 	 */
 	enum mvod_run_state last_state;
 	int64_t tracked; /* poses received in state TRACKING: 0 = the run never tracked */
+	/* Pose messages that were no pose (mvod_pose_from_quat), not drawn; the first's reason. */
+	int64_t refused;
+	char refused_why[256];
 	/* Receive clock (LCM's recv_utime) of the newest pose, and the pose rate measured on it. */
 	int64_t last_pose_us, rate_start_us, rate_start_poses;
 	double pose_hz; /* NAN until a second of poses has been seen */

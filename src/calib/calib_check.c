@@ -105,12 +105,31 @@ static int check_lens(const struct mvod_camera *c, char *err, size_t errlen)
 	return 0;
 }
 
+/*
+ * Every distortion coefficient a number: a nan one made the ray walk fail at its first step,
+ * "the distortion folds the image", which sent the user looking at the lens.
+ */
+static int check_numbers(const struct mvod_camera *c, char *err, size_t errlen)
+{
+	static const char *const opencv[MVOD_MAX_DIST] = {
+		"k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4", "tx", "ty"};
+	static const char *const kb4[4] = {"k1", "k2", "k3", "k4"};
+	for (int i = 0; i < c->n_dist; i++)
+		if (!isfinite(c->dist[i]))
+			return mvod_errf(err, errlen, -EINVAL, "distortion coefficient %s = %g is "
+					 "not a number", c->model == MVOD_CAM_FISHEYE_KB4 && i < 4
+					 ? kb4[i] : opencv[i], c->dist[i]);
+	return 0;
+}
+
 /* value within [lo, hi], else -EINVAL naming it. */
 static int in_range(const char *name, double value, double lo, double hi, const char *why,
 		    char *err, size_t errlen)
 {
 	if (value >= lo && value <= hi)
 		return 0;
+	if (!isfinite(value))
+		return mvod_errf(err, errlen, -EINVAL, "%s = %g is not a number", name, value);
 	return mvod_errf(err, errlen, -EINVAL, "%s = %g px is outside [%g, %g] px (%s)", name, value,
 			 lo, hi, why);
 }
@@ -128,6 +147,8 @@ int mvod_camera_check(const struct mvod_camera *c, char *err, size_t errlen)
 		ret = in_range("cx", c->cx, -PP_MARGIN * w, (1 + PP_MARGIN) * w, pwhy, err, errlen);
 	if (!ret)
 		ret = in_range("cy", c->cy, -PP_MARGIN * h, (1 + PP_MARGIN) * h, pwhy, err, errlen);
+	if (!ret)
+		ret = check_numbers(c, err, errlen);
 	if (!ret && mvod_camera_has_distortion(c))
 		ret = check_lens(c, err, errlen);
 	return ret;

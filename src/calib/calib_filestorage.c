@@ -22,6 +22,7 @@
 
 #include "calib/calib_internal.h"
 #include "util/errbuf.h"
+#include "util/text_guard.h"
 
 #define UNKNOWN_FORMAT                                                                            \
 	"unknown calibration format: not mvod JSON, a [K, dist] JSON pair, KITTI calib.txt, "      \
@@ -336,8 +337,11 @@ static int load_yaml(const char *text, size_t opencv_header_at, yaml_document_t 
 	/* OpenCV's "%YAML:1.0" is no YAML directive: as a comment, line numbers stay right. */
 	if (opencv_header_at != SIZE_MAX)
 		copy[opencv_header_at] = '#';
-	yaml_parser_set_input_string(&parser, (const unsigned char *)copy, strlen(copy));
-	int ret = yaml_parser_load(&parser, doc) ? 0 : yaml_error(&parser, err, errlen);
+	size_t len = strlen(copy);
+	yaml_parser_set_input_string(&parser, (const unsigned char *)copy, len);
+	int ret = mvod_text_guard(copy, len, MVOD_TEXT_YAML, err, errlen);
+	if (!ret && !yaml_parser_load(&parser, doc))
+		ret = yaml_error(&parser, err, errlen);
 	for (bool more = ret == 0 && yaml_document_get_root_node(doc); more && ret == 0;) {
 		yaml_document_t next;
 		if (!yaml_parser_load(&parser, &next)) {
@@ -362,8 +366,9 @@ static int load_xml(const char *text, xmlDoc **doc, char *err, size_t errlen)
 	size_t len = strlen(text);
 	if (strstr(text, "<!DOCTYPE"))
 		return mvod_errf(err, errlen, -EINVAL, "XML with a DOCTYPE is not OpenCV's: refused");
-	if (len > INT_MAX)
-		return mvod_errf(err, errlen, -EFBIG, "XML text too large");
+	int ret = mvod_text_guard(text, len, MVOD_TEXT_XML, err, errlen);
+	if (ret)
+		return ret;
 	xmlResetLastError();
 	*doc = xmlReadMemory(text, (int)len, NULL, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
 	if (!*doc) {

@@ -12,7 +12,9 @@
 #include "calib/calib_internal.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
+#include "util/input.h"
 #include "util/read_file.h"
+#include "util/text_guard.h"
 
 /* Calibration files are small; anything bigger is not one. */
 #define CALIB_MAX_BYTES (4 * 1024 * 1024)
@@ -51,6 +53,8 @@ static int json_K(const cJSON *K, struct mvod_camera *cam)
 
 static cJSON *json_parse(const char *text, char *err, size_t errlen)
 {
+	if (mvod_text_guard(text, strlen(text), MVOD_TEXT_JSON, err, errlen))
+		return NULL;
 	cJSON *root = cJSON_Parse(text);
 	if (!root)
 		mvod_errf(err, errlen, -EINVAL, "not valid JSON (near: %.20s)",
@@ -259,7 +263,8 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 		     char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", &text, NULL, err, errlen);
+	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", MVOD_INPUT_STREAM,
+				 &text, NULL, err, errlen);
 	if (ret)
 		return ret;
 	/* A UTF-8 byte order mark (Windows editors write one) is no part of the text. */

@@ -330,10 +330,10 @@ static int scan_source(const struct mvod_calib_opts *o, int min_views, struct st
 	sc->w = info.width;
 	sc->h = info.height;
 	sc->focus = info.focus;
-	ret = mvod_calib_det_create(&o->board, &det);
-	if (ret)
+	ret = o->check_outputs ? o->check_outputs(o->check_ctx, err, errlen) : 0;
+	if (!ret && (ret = mvod_calib_det_create(&o->board, &det)) != 0)
 		mvod_errf(err, errlen, ret, "cannot set up the board detector: %s", strerror(-ret));
-	else
+	else if (!ret)
 		ret = read_all(o, src, det, s, sc, err, errlen);
 	mvod_calib_det_destroy(det);
 	mvod_source_close(src);

@@ -15,6 +15,7 @@
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
 #include "util/linalg.h"
+#include "util/text_guard.h"
 
 #define DEG (180.0 / M_PI)
 
@@ -329,10 +330,13 @@ int mvod_mount_write(const char *path, const char *text, const struct mvod_mount
 	char first = text[strspn(text, " \t\r\n")];
 	if (first != '{' && first != '[') /* JSON: mvod's object, or another tool's array */
 		return write_filestorage(path, text, m, err, errlen);
+	char why[256];
+	int ret = mvod_text_guard(text, strlen(text), MVOD_TEXT_JSON, why, sizeof(why));
+	if (ret)
+		return mvod_errf(err, errlen, ret, "%s: %s", path, why);
 	cJSON *root = cJSON_Parse(text);
 	const cJSON *fmt = cJSON_GetObjectItemCaseSensitive(root, "format");
 	char *out = NULL;
-	int ret = 0;
 	if (!cJSON_IsObject(root) || !cJSON_IsString(fmt) ||
 	    strcmp(fmt->valuestring, MVOD_CALIB_FORMAT) != 0) {
 		ret = mvod_errf(err, errlen, -EINVAL, "%s is not mvod JSON (%s), the only JSON camera "

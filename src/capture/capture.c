@@ -15,6 +15,7 @@
 #include "capture/mailbox.h"
 #include "capture/queue.h"
 #include "mvod/log.h"
+#include "util/errbuf.h"
 
 #define BACKOFF_FIRST_MS 500
 #define BACKOFF_MAX_MS 8000
@@ -131,7 +132,7 @@ static void reopen(struct mvod_capture *c)
 	if (sleep_unless_stopped(c, c->backoff_ms))
 		return;
 	c->backoff_ms = c->backoff_ms * 2 > BACKOFF_MAX_MS ? BACKOFF_MAX_MS : c->backoff_ms * 2;
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	struct mvod_source *src;
 	int ret = mvod_source_open(c->uri, &src, err, sizeof(err));
 	if (ret) {

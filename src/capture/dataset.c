@@ -76,7 +76,8 @@ int mvod_ds_out_of_order(const char *path, size_t lineno, int64_t ns, int64_t pr
 			 mvod_ds_seconds(prev, b), prev_line, what);
 }
 
-int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p)
+int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p, char *why,
+		       size_t whylen)
 {
 	double v[7];
 	for (int k = 0; k < 7; k++) {
@@ -93,11 +94,9 @@ int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *
 	s += strspn(s, " \t");
 	if (*s && (sep == ' ' || *s != sep))
 		return -EINVAL;
-	memcpy(p->t, v, sizeof(p->t));
 	const double q[4] = {w_first ? v[3] : v[6], v[w_first ? 4 : 3], v[w_first ? 5 : 4],
 			     v[w_first ? 6 : 5]};
-	mvod_quat_to_rot(q, p->R);
-	return 0;
+	return mvod_pose_from_quat(v, q, p, why, whylen);
 }
 
 /* Appends "dir/name\0" to the text of f. */
@@ -132,12 +131,22 @@ static int push_time(struct mvod_ds_frames *f, int64_t ns)
 	return 0;
 }
 
+/* ns to the microseconds of struct mvod_frame, to the nearest (times are not negative). */
+static int64_t ns_to_us(int64_t ns)
+{
+	return ns / 1000 + (ns % 1000 >= 500); /* not (ns + 500) / 1000: no overflow at the end */
+}
+
 int mvod_ds_frames_add(struct mvod_ds_frames *f, const char *index, size_t lineno,
 		       const char *dir, const char *name, int64_t ns, char *err, size_t errlen)
 {
-	if (f->n > 0 && ns <= f->ns[f->n - 1])
+	/*
+	 * Frames go on in microseconds (struct mvod_frame's utime): two in one microsecond were
+	 * two frames at one time downstream (found by fuzz/euroc_index).
+	 */
+	if (f->n > 0 && ns_to_us(ns) <= ns_to_us(f->ns[f->n - 1]))
 		return mvod_ds_out_of_order(index, lineno, ns, f->ns[f->n - 1], f->last_line,
-					    "frames", err, errlen);
+					    "frames (to the microsecond)", err, errlen);
 	int ret = push_path(f, dir, name);
 	if (ret == 0)
 		ret = push_time(f, ns);
@@ -165,12 +174,6 @@ static char **pack_paths(const struct mvod_ds_frames *f)
 		pool += strlen(pool) + 1;
 	}
 	return paths;
-}
-
-/* ns to the microseconds of struct mvod_frame, to the nearest (times are not negative). */
-static int64_t ns_to_us(int64_t ns)
-{
-	return ns / 1000 + (ns % 1000 >= 500); /* not (ns + 500) / 1000: no overflow at the end */
 }
 
 int mvod_ds_open_frames(struct mvod_dataset *ds, struct mvod_ds_frames *f, char *err,

@@ -15,8 +15,12 @@
 #include "capture/images.h"
 #include "mvod/geom.h"
 
-/* One ground-truth line: its time in ns and the body pose it gives; -EINVAL when malformed. */
-typedef int (*mvod_ds_gt_line_fn)(const char *line, int64_t *ns, struct mvod_pose *body);
+/*
+ * One ground-truth line: its time in ns and the body pose it gives; -EINVAL when malformed,
+ * with the reason in why when the numbers are there but are no pose (mvod_pose_from_quat).
+ */
+typedef int (*mvod_ds_gt_line_fn)(const char *line, int64_t *ns, struct mvod_pose *body,
+				  char *why, size_t whylen);
 
 /* A dataset source's state; the euroc: and tum: backends are this. */
 struct mvod_dataset {
@@ -43,9 +47,11 @@ int mvod_ds_parse_seconds(const char *s, const char **end, int64_t *ns);
 /*
  * The 7 numbers of a pose after a line's time: "tx ty tz" in metres, then a unit quaternion,
  * w x y z (w_first, EuRoC) or x y z w (TUM); each after sep, ',' (more columns may follow) or
- * ' ' (whitespace; nothing may follow). -EINVAL when s is not that.
+ * ' ' (whitespace; nothing may follow). -EINVAL when s is not that, or, with the reason in
+ * why, when its numbers are no pose (traj.h: mvod_pose_from_quat).
  */
-int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p);
+int mvod_ds_parse_pose(const char *s, char sep, bool w_first, struct mvod_pose *p, char *why,
+		       size_t whylen);
 /* ns as seconds with all 9 decimals ("1403636579.763555584"), into buf; returns buf. */
 const char *mvod_ds_seconds(int64_t ns, char buf[24]);
 /* -EINVAL with "PATH line N: time T is not after T' of line N'" for frames or poses (what). */

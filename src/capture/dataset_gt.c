@@ -4,7 +4,7 @@
  * relative to the first of them, so in mvod's world (the first camera frame, OpenCV axes).
  */
 #include "capture/dataset.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 #include <errno.h>
 #include <math.h>
@@ -49,9 +49,12 @@ static int add_line(void *ctx, char *line, size_t lineno, char *err, size_t errl
 	const struct mvod_dataset *ds = g->ds;
 	int64_t ns;
 	struct mvod_pose body;
-	if (ds->gt_line(line, &ns, &body) < 0)
-		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not \"%s\"",
-				 ds->gt_path, lineno, line, ds->gt_layout);
+	char why[256] = "";
+	if (ds->gt_line(line, &ns, &body, why, sizeof(why)) < 0)
+		return why[0] ? mvod_errf(err, errlen, -EINVAL, "%s line %zu: %s", ds->gt_path,
+					  lineno, why)
+			      : mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not "
+					  "\"%s\"", ds->gt_path, lineno, line, ds->gt_layout);
 	if (g->n > 0 && ns <= g->ns[g->n - 1])
 		return mvod_ds_out_of_order(ds->gt_path, lineno, ns, g->ns[g->n - 1], g->last_line,
 					    "poses", err, errlen);
@@ -150,7 +153,7 @@ int mvod_ds_ground_truth(void *priv, struct mvod_traj *gt, char *from, size_t fr
 	snprintf(from, fromlen, "%s", ds->gt_path);
 	*gt = (struct mvod_traj){.format = MVOD_TRAJ_TUM};
 	struct samples g = {.ds = ds};
-	int ret = mvod_read_lines(ds->gt_path, add_line, &g, err, errlen);
+	int ret = mvod_lines_each(ds->gt_path, "ground truth", add_line, &g, err, errlen);
 	if (ret == 0 && g.n == 0)
 		ret = mvod_errf(err, errlen, -ENODATA, "%s holds no poses", ds->gt_path);
 	if (ret == 0 && resample(&g, ds, gt) < 0)

@@ -15,7 +15,7 @@
 #include "capture/dataset.h"
 #include "capture/euroc.h"
 #include "capture/uri.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 static bool is_dir(const char *path)
 {
@@ -76,12 +76,13 @@ static int add_frame(void *ctx, char *line, size_t lineno, char *err, size_t err
 }
 
 /* "timestamp [ns], p_RS_R x y z [m], q_RS w x y z, ..." (velocities and biases follow). */
-static int gt_line(const char *line, int64_t *ns, struct mvod_pose *body)
+static int gt_line(const char *line, int64_t *ns, struct mvod_pose *body, char *why,
+		   size_t whylen)
 {
 	const char *s;
 	if (mvod_ds_parse_ns(line, &s, ns) < 0)
 		return -EINVAL;
-	return mvod_ds_parse_pose(s, ',', true, body);
+	return mvod_ds_parse_pose(s, ',', true, body, why, whylen);
 }
 
 static int euroc_open(void *priv, const char *location, char *err, size_t errlen)
@@ -103,7 +104,7 @@ static int euroc_open(void *priv, const char *location, char *err, size_t errlen
 	if (!ret)
 		ret = mvod_euroc_sensor_load(sensor, &ds->cam, &ds->body_cam, err, errlen);
 	if (!ret)
-		ret = mvod_read_lines(ds->index, add_frame, &x, err, errlen);
+		ret = mvod_lines_each(ds->index, "EuRoC data.csv", add_frame, &x, err, errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;

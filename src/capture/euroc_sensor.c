@@ -15,6 +15,7 @@
 
 #include "util/errbuf.h"
 #include "util/read_file.h"
+#include "util/text_guard.h"
 
 /* A sensor.yaml is a few hundred bytes; anything past 1 MiB is no sensor file. */
 #define SENSOR_MAX_BYTES (1u << 20)
@@ -167,9 +168,13 @@ static int load(struct sensor *s, const char *text, char *err, size_t errlen)
 	yaml_parser_t parser;
 	if (!yaml_parser_initialize(&parser))
 		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", s->path);
-	yaml_parser_set_input_string(&parser, (const unsigned char *)text, strlen(text));
-	int ret = 0;
-	if (!yaml_parser_load(&parser, &s->doc))
+	size_t len = strlen(text);
+	yaml_parser_set_input_string(&parser, (const unsigned char *)text, len);
+	char why[256];
+	int ret = mvod_text_guard(text, len, MVOD_TEXT_YAML, why, sizeof(why));
+	if (ret)
+		mvod_errf(err, errlen, ret, "%s %s", s->path, why);
+	else if (!yaml_parser_load(&parser, &s->doc))
 		ret = mvod_errf(err, errlen, -EINVAL, "%s line %zu: not YAML: %s", s->path,
 				parser.problem_mark.line + 1,
 				parser.problem ? parser.problem : "?");
@@ -194,7 +199,7 @@ int mvod_euroc_sensor_load(const char *path, struct mvod_camera *cam, struct mvo
 			   char *err, size_t errlen)
 {
 	char *text = NULL;
-	int ret = mvod_read_file(path, SENSOR_MAX_BYTES, "EuRoC sensor file", &text, NULL, err,
+	int ret = mvod_read_file(path, SENSOR_MAX_BYTES, "EuRoC sensor file", 0, &text, NULL, err,
 				 errlen);
 	if (ret)
 		return ret;

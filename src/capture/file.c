@@ -12,6 +12,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "capture/image_header.h"
 #include "capture/uri.h"
 #include "capture/video.h"
 #include "util/clock.h"
@@ -84,6 +85,12 @@ static int file_open(void *priv, const char *location, char *err, size_t errlen)
 	if (ret < 0)
 		return ret;
 	ret = mvod_video_open(path, &fs->video);
+	if (ret == -ENODATA)
+		return mvod_errf(err, errlen, ret, "video %s holds no frame", path);
+	if (ret == -E2BIG)
+		return mvod_errf(err, errlen, ret, "video %s: its frames are larger than the %lld "
+				 "pixels (8192x8192) of any frame mvod takes", path,
+				 (long long)MVOD_FRAME_MAX_PIXELS);
 	if (ret < 0)
 		return mvod_errf(err, errlen, ret, "cannot decode video %s: FFmpeg cannot "
 					 "read it (corrupt, or not a video)", path);

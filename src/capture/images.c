@@ -3,7 +3,6 @@
 #include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
-#include <fcntl.h>
 #include <limits.h>
 #include <math.h>
 #include <stdbool.h>
@@ -14,15 +13,17 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "capture/image_header.h"
 #include "mvod/log.h"
+#include "util/input.h"
+#include "util/lines.h"
 #include "util/output.h"
-#include "util/read_file.h"
 
 /* Without a times.txt, frames are taken 10 Hz apart (KITTI's rate). */
 #define DEFAULT_PERIOD_US 100000
 
 /*
- * Bounds on a frame file, checked with fstat before a byte is read, so that one huge file
+ * Bounds on a frame file, checked by the input path before a byte is read, so that one huge file
  * neither takes gigabytes of memory nor stays in the reused buffer. The first image may be
  * up to 256 MiB: an uncompressed 16-bit colour 8K frame (7680 x 4320 x 6 bytes) is 199 MB.
  * Later ones may be as large as the first image's size stored uncompressed at 16 bits and
@@ -198,23 +199,20 @@ static int load_times(struct mvod_images *im, const char *path, char *err, size_
 	if (!im->times_us)
 		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading %s", path);
 	struct times x = {path, im->times_us, im->n, 0};
-	int ret = mvod_read_lines(path, time_line, &x, err, errlen);
+	int ret = mvod_lines_each(path, "times.txt", time_line, &x, err, errlen);
 	if (!ret && x.k < x.n)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s has %zu timestamps for %zu images; it "
 				"needs one line per image", path, x.k, x.n);
 	return ret;
 }
 
-/* Reads len bytes, retrying after signals; -EIO when the file is shorter. */
-static int read_all(int fd, uint8_t *buf, size_t len)
+/* Reads len bytes; -EIO when the file is shorter. */
+static int read_all(struct mvod_input *in, uint8_t *buf, size_t len)
 {
-	size_t got = 0;
-	while (got < len) {
-		ssize_t r = read(fd, buf + got, len - got);
-		if (r < 0 && errno == EINTR)
-			continue;
+	for (size_t got = 0; got < len;) {
+		ssize_t r = mvod_input_read(in, buf + got, len - got, NULL, 0);
 		if (r < 0)
-			return -errno;
+			return (int)r;
 		if (r == 0)
 			return -EIO;
 		got += (size_t)r;
@@ -223,52 +221,48 @@ static int read_all(int fd, uint8_t *buf, size_t len)
 }
 
 /*
- * The whole of path into im->buf: -EFBIG beyond im->limit, -ENODATA for no regular file.
- * O_NONBLOCK: a FIFO named like a frame must not block the open.
+ * The whole of path into im->buf through the input path (noted at open; never blocking):
+ * -EFBIG beyond im->limit, -ENODATA for no regular file.
  */
 static int read_file(struct mvod_images *im, const char *path, size_t *len)
 {
-	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-	if (fd < 0)
-		return -errno;
-	int ret = 0;
-	struct stat st;
-	if (fstat(fd, &st) < 0) {
-		ret = -errno;
-		goto out;
-	}
-	size_t size = (size_t)st.st_size;
-	if (!S_ISREG(st.st_mode) || size > im->limit) {
-		ret = S_ISREG(st.st_mode) ? -EFBIG : -ENODATA;
-		goto out;
-	}
+	struct mvod_input in;
+	int ret = mvod_input_open(&in, path, "frame", MVOD_INPUT_NOTED, im->limit, NULL, 0);
+	if (ret)
+		return ret == -EINVAL || ret == -EISDIR ? -ENODATA : ret;
+	size_t size = (size_t)in.size;
 	if (size > im->cap) {
 		uint8_t *grown = realloc(im->buf, size);
-		if (!grown) {
-			ret = -ENOMEM;
-			goto out;
+		ret = grown ? 0 : -ENOMEM;
+		if (grown) {
+			im->buf = grown;
+			im->cap = size;
 		}
-		im->buf = grown;
-		im->cap = size;
 	}
-	ret = read_all(fd, im->buf, size);
+	if (!ret)
+		ret = read_all(&in, im->buf, size);
+	mvod_input_close(&in);
 	*len = size;
-out:
-	close(fd);
 	return ret;
 }
 
 /*
- * Image i decoded into the decoder's buffer: -errno from reading (-EFBIG for too large a
- * file), -EINVAL when it is no image.
+ * Image i decoded into the decoder's buffer once its header passed, *w x *h the size the
+ * header states: -errno from reading (-EFBIG for too large a file), -EINVAL when it is no
+ * image, -EMSGSIZE when the header states another size than the sequence's, -E2BIG a size
+ * past MVOD_FRAME_MAX_PIXELS; none of these is decoded.
  */
-static int load(struct mvod_images *im, size_t i, struct mvod_image *img)
+static int load(struct mvod_images *im, size_t i, struct mvod_image *img, int *w, int *h)
 {
 	size_t len = 0;
 	int ret = read_file(im, im->paths[i], &len);
-	if (ret < 0)
-		return ret;
-	return mvod_imgdec_decode(im->dec, im->buf, len, img);
+	if (!ret)
+		ret = mvod_image_header_size(im->buf, len, w, h);
+	if (!ret && im->info.width && (*w != im->info.width || *h != im->info.height))
+		ret = -EMSGSIZE;
+	if (!ret && (int64_t)*w * *h > MVOD_FRAME_MAX_PIXELS)
+		ret = -E2BIG;
+	return ret ? ret : mvod_imgdec_decode(im->dec, im->buf, len, img);
 }
 
 /* The first image fixes the frame size and format of the whole sequence. */
@@ -279,8 +273,13 @@ static int load_first(struct mvod_images *im, char *err, size_t errlen)
 		return mvod_errf(err, errlen, ret, "cannot create an image decoder: %s",
 					 strerror(-ret));
 	struct mvod_image img;
+	int w = 0, h = 0;
 	im->limit = FIRST_MAX_BYTES;
-	ret = load(im, 0, &img);
+	ret = load(im, 0, &img, &w, &h);
+	if (ret == -E2BIG)
+		return mvod_errf(err, errlen, ret, "%s is %dx%d pixels, its header says: more than "
+				 "the %lld (8192x8192) of any frame mvod takes", im->paths[0], w, h,
+				 (long long)MVOD_FRAME_MAX_PIXELS);
 	if (ret == -EFBIG)
 		return mvod_errf(err, errlen, ret, "%s is larger than %zu MiB, more than any camera "
 					 "frame (an uncompressed 16-bit colour 8K frame is 190 MiB): not "
@@ -309,23 +308,23 @@ static double times_fps(const int64_t *t, size_t n)
 }
 
 /*
- * Every frame and times.txt (NULL for a list: its index file is read through mvod_read_file,
- * which notes it) are inputs: no output of this process may be one (util/output.h).
+ * Every frame is an input: no output of this process may be one (util/output.h). Noted here,
+ * at open, so that reading one allocates nothing (MVOD_INPUT_NOTED); times.txt and a dataset's
+ * index are noted by the line reader that reads them.
  */
-static int note_inputs(const struct mvod_images *im, const char *times_path, char *err,
-		       size_t errlen)
+static int note_frames(const struct mvod_images *im, char *err, size_t errlen)
 {
-	const char *name = times_path;
-	int ret = times_path ? mvod_input_note(times_path) : 0;
-	for (size_t i = 0; i < im->n && !ret; i++)
-		ret = mvod_input_note(name = im->paths[i]);
-	return ret ? mvod_errf(err, errlen, ret, "%s: %s", name, strerror(-ret)) : 0;
+	int ret = 0;
+	size_t i = 0;
+	for (; i < im->n && !ret; i++)
+		ret = mvod_input_note(im->paths[i]);
+	return ret ? mvod_errf(err, errlen, ret, "%s: %s", im->paths[i - 1], strerror(-ret)) : 0;
 }
 
 /* What every way of opening ends with: inputs noted, the first image decoded, info filled in. */
-static int start(struct mvod_images *im, const char *times_path, char *err, size_t errlen)
+static int start(struct mvod_images *im, char *err, size_t errlen)
 {
-	int ret = note_inputs(im, times_path, err, errlen);
+	int ret = note_frames(im, err, errlen);
 	if (ret >= 0)
 		ret = load_first(im, err, errlen);
 	if (ret < 0)
@@ -345,7 +344,7 @@ int mvod_images_open(struct mvod_images *im, const char *dir, const char *times_
 	ret = load_times(im, times_path, err, errlen);
 	if (ret < 0 && ret != -ENOENT)
 		goto fail;
-	ret = start(im, times_path, err, errlen);
+	ret = start(im, err, errlen);
 	if (ret < 0)
 		goto fail;
 	im->info.times_assumed = !im->times_us;
@@ -361,7 +360,7 @@ int mvod_images_open_list(struct mvod_images *im, char **paths, size_t n, int64_
 	im->paths = paths;
 	im->n = n;
 	im->times_us = times_us;
-	int ret = start(im, NULL, err, errlen);
+	int ret = start(im, err, errlen);
 	if (ret < 0)
 		mvod_images_close(im);
 	return ret;
@@ -378,12 +377,14 @@ int mvod_images_read(void *priv, struct mvod_frame *frame, const struct mvod_ima
 	frame->index = (int64_t)i;
 	frame->utime = im->times_us ? im->times_us[i] : (int64_t)i * DEFAULT_PERIOD_US;
 	/* One unreadable file is one bad frame (-EINVAL, which callers skip), not a broken source. */
-	int ret = load(im, i, &frame->img);
+	int w, h;
+	int ret = load(im, i, &frame->img, &w, &h);
 	if (ret == 0)
 		return 0;
-	frame->bad = ret == -EFBIG    ? MVOD_BAD_TOO_LARGE
-		     : ret == -EINVAL ? MVOD_BAD_CORRUPT
-				      : MVOD_BAD_UNREADABLE;
+	frame->bad = ret == -EFBIG      ? MVOD_BAD_TOO_LARGE
+		     : ret == -EMSGSIZE ? MVOD_BAD_SIZE
+		     : ret == -EINVAL   ? MVOD_BAD_CORRUPT
+					: MVOD_BAD_UNREADABLE;
 	return -EINVAL;
 }
 

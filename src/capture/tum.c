@@ -19,13 +19,14 @@
 
 #include "capture/dataset.h"
 #include "mvod/log.h"
+#include "util/lines.h"
 #include "util/read_file.h"
 
 struct tum {
 	struct mvod_dataset ds; /* first, so that the dataset ops work on it as is */
 	int freiburg;           /* 1..3 when the intrinsics are that camera's published ones */
 	char dir[PATH_MAX];
-	char why[512];          /* why the folder gives no camera, logged when one is asked for */
+	char why[MVOD_ERR_MAX]; /* why the folder gives no camera, logged when one is asked for */
 };
 
 static_assert(offsetof(struct tum, ds) == 0, "the dataset ops take the tum priv");
@@ -83,12 +84,13 @@ static int add_rgb(void *ctx, char *line, size_t lineno, char *err, size_t errle
 }
 
 /* groundtruth.txt: "timestamp tx ty tz qx qy qz qw", seconds, metres. */
-static int gt_line(const char *line, int64_t *ns, struct mvod_pose *cam)
+static int gt_line(const char *line, int64_t *ns, struct mvod_pose *cam, char *why,
+		   size_t whylen)
 {
 	const char *s;
 	if (mvod_ds_parse_seconds(line, &s, ns) < 0)
 		return -EINVAL;
-	return mvod_ds_parse_pose(s, ' ', false, cam);
+	return mvod_ds_parse_pose(s, ' ', false, cam, why, whylen);
 }
 
 static int open_rgbd(struct tum *t, char *err, size_t errlen)
@@ -98,7 +100,7 @@ static int open_rgbd(struct tum *t, char *err, size_t errlen)
 	int ret = mvod_ds_optional(ds->gt_path, sizeof(ds->gt_path), t->dir, "groundtruth.txt",
 				   err, errlen);
 	if (!ret)
-		ret = mvod_read_lines(ds->index, add_rgb, &x, err, errlen);
+		ret = mvod_lines_each(ds->index, "TUM rgb.txt", add_rgb, &x, err, errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;
@@ -137,10 +139,14 @@ static int add_mono(void *ctx, char *line, size_t lineno, char *err, size_t errl
 	return mvod_ds_frames_add(&x->frames, x->path, lineno, x->dir, name, ns, err, errlen);
 }
 
-/* DSO's relative calibration (cx, cy < 1): fractions of the image, pixel edges at 0. */
+/*
+ * DSO's relative calibration (0 <= cx, cy < 1): fractions of the image, pixel edges at 0. A
+ * negative principal point is in pixels (outside the image's left or top edge), not a
+ * fraction: taken for one, it made "fx = 368640 px" of a 576 px focal length.
+ */
 static void from_relative(struct mvod_camera *cam)
 {
-	if (cam->cx >= 1 || cam->cy >= 1)
+	if (!(cam->cx >= 0 && cam->cx < 1 && cam->cy >= 0 && cam->cy < 1))
 		return;
 	cam->fx *= cam->width;
 	cam->fy *= cam->height;
@@ -198,7 +204,8 @@ static int open_mono(struct tum *t, char *err, size_t errlen)
 	char path[PATH_MAX], *text = NULL;
 	int ret = mvod_capture_path(path, sizeof(path), t->dir, "camera.txt", err, errlen);
 	if (!ret)
-		ret = mvod_read_lines(ds->index, add_mono, &x, err, errlen);
+		ret = mvod_lines_each(ds->index, "TUM monoVO times.txt", add_mono, &x, err,
+				      errlen);
 	if (ret) {
 		mvod_ds_frames_free(&x.frames);
 		return ret;
@@ -208,7 +215,7 @@ static int open_mono(struct tum *t, char *err, size_t errlen)
 	 * the camera. Why it was not taken is said when the run asks for one.
 	 */
 	/* A camera.txt is 4 short lines; 64 KiB is far past any. */
-	ret = mvod_read_file(path, 65536, "TUM monoVO camera.txt", &text, NULL, t->why,
+	ret = mvod_read_file(path, 65536, "TUM monoVO camera.txt", 0, &text, NULL, t->why,
 			     sizeof(t->why));
 	if (!ret)
 		ret = parse_camera(text, path, &ds->cam, t->why, sizeof(t->why));

@@ -11,6 +11,8 @@
 #include <libavutil/pixdesc.h>
 #include <libswscale/swscale.h>
 
+#include "capture/image_header.h"
+
 struct mvod_video {
 	AVFormatContext *fmt;
 	AVCodecContext *dec;
@@ -23,6 +25,7 @@ struct mvod_video {
 	int64_t start;      /* the stream's first time, in its time base (0 when unknown) */
 	AVRational tb;
 	bool draining;      /* the demuxer is done; the decoder is being flushed */
+	bool primed;        /* frame holds the first frame, decoded at open, not yet read */
 	uint8_t range[256]; /* limited-range (16-235) luma -> full range, as swscale's BGR had it */
 };
 
@@ -55,6 +58,14 @@ static int open_decoder(struct mvod_video *v)
 	if (avcodec_parameters_to_context(v->dec, par) < 0)
 		return -EINVAL;
 	v->dec->thread_count = 1;
+	/*
+	 * A frame whose header states far more pixels than the stream's is refused, not
+	 * allocated. FFmpeg checks its buffers' padded size against this: (w + 64)(h + 64)
+	 * refused every frame of a 64x48 MPEG-2 stream, four times that passes them; a bomb's
+	 * 30000x30000 in a 640x480 stream is 600 times.
+	 */
+	if (v->w > 0 && v->h > 0)
+		v->dec->max_pixels = 4 * (int64_t)(v->w + 64) * (v->h + 64);
 	if (avcodec_open2(v->dec, codec, NULL) < 0)
 		return -EINVAL;
 	v->pkt = av_packet_alloc();
@@ -79,10 +90,37 @@ static int open_stream(struct mvod_video *v, const char *path)
 	v->h = st->codecpar->height;
 	v->tb = st->time_base;
 	v->start = st->start_time == AV_NOPTS_VALUE ? 0 : st->start_time;
+	if ((int64_t)v->w * v->h > MVOD_FRAME_MAX_PIXELS)
+		return -E2BIG;
 	if (v->w <= 0 || v->h <= 0 || v->w > 65535 || v->h > 65535)
 		return 0; /* props says so; mvod_video_read refuses every frame */
 	v->grey = av_malloc((size_t)v->w * (size_t)v->h);
 	return v->grey ? 0 : -ENOMEM;
+}
+
+/* The next decoded frame into v->frame: 0, or -ENODATA once the decoder is flushed. */
+static int decode(struct mvod_video *v)
+{
+	for (;;) {
+		int ret = avcodec_receive_frame(v->dec, v->frame);
+		if (ret == 0)
+			return 0;
+		if (ret == AVERROR_EOF || v->draining)
+			return -ENODATA;
+		/* EAGAIN, or an error that was one bad frame (dropped): the next packet. */
+		ret = av_read_frame(v->fmt, v->pkt);
+		if (ret == AVERROR(EAGAIN))
+			continue;
+		if (ret < 0) { /* the end, or the file broke off: what the decoder holds comes out */
+			v->draining = true;
+			avcodec_send_packet(v->dec, NULL);
+			continue;
+		}
+		/* A packet the decoder refuses (corrupt) is skipped, as OpenCV's reader did. */
+		if (v->pkt->stream_index == v->stream)
+			(void)avcodec_send_packet(v->dec, v->pkt);
+		av_packet_unref(v->pkt);
+	}
 }
 
 int mvod_video_open(const char *path, struct mvod_video **out)
@@ -98,6 +136,9 @@ int mvod_video_open(const char *path, struct mvod_video **out)
 	int ret = open_stream(v, path);
 	if (ret == 0)
 		ret = open_decoder(v);
+	if (ret == 0)
+		ret = decode(v);
+	v->primed = ret == 0;
 	if (ret) {
 		mvod_video_close(v);
 		return ret;
@@ -136,31 +177,6 @@ void mvod_video_props(struct mvod_video *v, struct mvod_source_info *info)
 		n = floor(sec * info->fps + 0.5);
 	}
 	info->frames = n >= 1 && n < 1e15 ? (int64_t)n : -1;
-}
-
-/* The next decoded frame into v->frame: 0, or -ENODATA once the decoder is flushed. */
-static int decode(struct mvod_video *v)
-{
-	for (;;) {
-		int ret = avcodec_receive_frame(v->dec, v->frame);
-		if (ret == 0)
-			return 0;
-		if (ret == AVERROR_EOF || v->draining)
-			return -ENODATA;
-		/* EAGAIN, or an error that was one bad frame (dropped): the next packet. */
-		ret = av_read_frame(v->fmt, v->pkt);
-		if (ret == AVERROR(EAGAIN))
-			continue;
-		if (ret < 0) { /* the end, or the file broke off: what the decoder holds comes out */
-			v->draining = true;
-			avcodec_send_packet(v->dec, NULL);
-			continue;
-		}
-		/* A packet the decoder refuses (corrupt) is skipped, as OpenCV's reader did. */
-		if (v->pkt->stream_index == v->stream)
-			(void)avcodec_send_packet(v->dec, v->pkt);
-		av_packet_unref(v->pkt);
-	}
 }
 
 /* True when plane 0 of f's format holds 8-bit luma, one byte a pixel (grey, planar YUV, NV12). */
@@ -215,8 +231,12 @@ static int to_grey(struct mvod_video *v, const AVFrame *f, bool luma, bool limit
 
 int mvod_video_read(struct mvod_video *v, struct mvod_image *img, int64_t *media_us)
 {
-	av_frame_unref(v->frame);
-	int ret = decode(v);
+	int ret = 0;
+	if (!v->primed) {
+		av_frame_unref(v->frame);
+		ret = decode(v);
+	}
+	v->primed = false;
 	if (ret)
 		return ret;
 	const AVFrame *f = v->frame;

@@ -17,7 +17,13 @@
 
 struct mvod_video;
 
-/* -EINVAL when FFmpeg cannot open the file, finds no video stream or no decoder for it. */
+/*
+ * Opens the file and decodes its first frame (kept for the first read): -EINVAL when FFmpeg
+ * cannot open the file, finds no video stream or no decoder for it, -E2BIG when the stream's
+ * size is past MVOD_FRAME_MAX_PIXELS (capture/image_header.h), -ENODATA when it holds no
+ * frame (a video of none once "succeeded" with 0 frames). No frame is decoded beyond the
+ * stream's pixel count (FFmpeg's max_pixels): a frame that states more is not allocated.
+ */
 int mvod_video_open(const char *path, struct mvod_video **out);
 /*
  * Size, nominal fps (0 = unknown) and frame count (-1 = unknown) the container declares; for

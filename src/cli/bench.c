@@ -20,6 +20,8 @@
 #include "mvod/pipeline.h"
 #include "mvod/plot.h"
 #include "util/atomic_file.h"
+#include "util/errbuf.h"
+#include "util/lines.h"
 #include "util/output.h"
 
 /*
@@ -99,7 +101,8 @@ static void usage(FILE *out)
 "  mvod bench --source kitti:data/sequences/07 --gt data/poses/07.txt --scale gt \\\n"
 "       --mode twoview --sweep 'detector=orb,sift;matcher=bf-cross,bf-ratio;features=1000,3000'\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a run-time fault, 2 on a usage or configuration error (as\n"
+"mvod run's: a ground truth or calibration that cannot serve, an output refused at start).\n");
 }
 
 /* The table: one column list for Markdown and CSV. */
@@ -752,6 +755,7 @@ static int run_plots(const struct bench *b, const struct collect *c, struct whol
 	return ret;
 }
 
+/* One run and its row: the exit status (cli_run_status for the run's own failures). */
 static int bench_one(const struct bench *b)
 {
 	struct collect c = {0};
@@ -763,6 +767,7 @@ static int bench_one(const struct bench *b)
 	struct whole_run w = {0};
 	struct row row;
 	int ret = mvod_run(&o, NULL, NULL, &s);
+	int status = cli_run_status(ret, &s);
 	if (!ret && c.n < 2) {
 		LOG(ERROR, "%s: %d frame(s): a benchmark needs at least two", o.source, c.n);
 		ret = -ENODATA;
@@ -784,7 +789,7 @@ static int bench_one(const struct bench *b)
 	free(w.buf);
 	free(c.est);
 	free(c.gt);
-	return ret;
+	return status ? status : ret ? EXIT_FAILURE : EXIT_SUCCESS;
 }
 
 /* --- the sweep --- */
@@ -828,23 +833,30 @@ static int run_child(char **argv)
 	return WIFEXITED(st) && WEXITSTATUS(st) == 0 ? 0 : -ECHILD;
 }
 
-/* The data line of a one-row CSV the child wrote, split into cells. */
+/* The data line (the second) of a one-row CSV the child wrote, split into cells: 1 when whole. */
+static int split_row(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
+{
+	struct row *r = ctx;
+	if (lineno < 2)
+		return 0;
+	int c = 0;
+	for (char *save, *t = strtok_r(line, ",", &save); t && c < NCOLS;
+	     t = strtok_r(NULL, ",", &save))
+		snprintf(r->f[c++], sizeof(r->f[0]), "%s", t);
+	return c == NCOLS ? 1
+			  : mvod_errf(err, errlen, -EINVAL, "line %zu: %d cells, not %d", lineno, c,
+				      NCOLS);
+}
+
 static int read_row(const char *path, struct row *r)
 {
-	char line[4096];
-	FILE *f = fopen(path, "r");
-	if (!f)
-		return -errno;
-	int ret = -EINVAL;
-	if (fgets(line, sizeof(line), f) && fgets(line, sizeof(line), f)) {
-		line[strcspn(line, "\n")] = '\0';
-		int c = 0;
-		for (char *save, *t = strtok_r(line, ",", &save); t && c < NCOLS;
-		     t = strtok_r(NULL, ",", &save))
-			snprintf(r->f[c++], sizeof(r->f[0]), "%s", t);
-		ret = c == NCOLS ? 0 : -EINVAL;
-	}
-	fclose(f);
+	char err[1024] = "";
+	r->f[NCOLS - 1][0] = '\0';
+	int ret = mvod_lines_each(path, "mvod bench CSV", split_row, r, err, sizeof(err));
+	if (!ret && !r->f[NCOLS - 1][0])
+		ret = mvod_errf(err, sizeof(err), -EINVAL, "%s holds no row", path);
+	if (ret)
+		LOG(ERROR, "%s", err);
 	return ret;
 }
 
@@ -974,14 +986,41 @@ out:
 }
 
 /*
- * Before any run, by the output policy: the tables may not be the ground truth (noted here,
- * as sweep children read it, not this process), a directory or a disk.
+ * --plots DIR: a folder (made at the end when it is not there yet) whose PNGs the output policy
+ * takes; a file there was refused only after the whole run.
+ */
+static int check_plots(const char *dir)
+{
+	static const char *const names[] = {"path-top.png", "path-side.png", "errors.png",
+					    "sweep.png"};
+	struct stat st;
+	if (stat(dir, &st) != 0)
+		return cli_check_writable("--plots", dir);
+	if (!S_ISDIR(st.st_mode)) {
+		fprintf(stderr, "%s: --plots %s is no folder: name a folder for the PNGs\n", cli_prog,
+			dir);
+		return -ENOTDIR;
+	}
+	char path[4096];
+	int ret = 0;
+	for (size_t i = 0; i < sizeof(names) / sizeof(names[0]) && !ret; i++) {
+		snprintf(path, sizeof(path), "%s/%s", dir, names[i]);
+		ret = cli_check_writable("--plots", path);
+	}
+	return ret;
+}
+
+/*
+ * Before any run, by the output policy: the tables and plots may not be the ground truth
+ * (noted here, as sweep children read it, not this process), a directory or a disk.
  */
 static int check_outputs(const struct bench *b)
 {
 	if (b->cfg.run.gt && mvod_input_note(b->cfg.run.gt) == -ENOMEM)
 		return -ENOMEM;
 	if (b->csv && cli_check_writable("--csv", b->csv))
+		return -EINVAL;
+	if (b->plots && check_plots(b->plots))
 		return -EINVAL;
 	return b->report && cli_check_writable("--report", b->report) ? -EINVAL : 0;
 }
@@ -998,8 +1037,12 @@ int mvod_cmd_bench(int argc, char **argv)
 	}
 	cli_quiet_libraries();
 	ret = check_outputs(&b);
-	if (!ret)
-		ret = b.grid ? bench_sweep(&b) : bench_one(&b);
+	if (ret)
+		ret = ret == -ENOMEM ? EXIT_FAILURE : EXIT_USAGE;
+	else if (b.grid)
+		ret = bench_sweep(&b) ? EXIT_FAILURE : EXIT_SUCCESS;
+	else
+		ret = bench_one(&b);
 	bench_free(&b);
-	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
+	return ret;
 }

@@ -40,7 +40,8 @@ static void usage(FILE *out)
 "Example:\n"
 "  mvod board --board charuco:5x7:0.04:0.02:DICT_6X6_250 --out board.png --dpi 300\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a run-time fault, 2 on a usage error (--out refused at\n"
+"start too).\n");
 }
 
 enum board_opt_id { OPT_BOARD = CLI_OPT_OWN, OPT_OUT, OPT_DPI };
@@ -167,6 +168,6 @@ int mvod_cmd_board(int argc, char **argv)
 		return EXIT_USAGE;
 	}
 	if (cli_check_writable("--out", c.out))
-		return EXIT_FAILURE;
+		return EXIT_USAGE;
 	return write_board(&c) ? EXIT_FAILURE : EXIT_SUCCESS;
 }

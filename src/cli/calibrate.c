@@ -10,6 +10,7 @@
 
 #include "mvod/calibrate.h"
 #include "mvod/log.h"
+#include "util/output.h"
 
 static void usage(FILE *out)
 {
@@ -50,8 +51,8 @@ static void usage(FILE *out)
 "  mvod calibrate --source file:board.mkv --board charuco:5x7:0.04:0.02:DICT_6X6_250 \\\n"
 "       --out calib.json --report calib.png\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure (no board, too few views, unwritable\n"
-"output), 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a run-time fault (no board, too few views, a write that\n"
+"failed), 2 on a usage error (--out or --report refused at start too).\n");
 }
 
 enum calib_opt_id {
@@ -76,6 +77,7 @@ struct cli {
 	struct mvod_calib_opts o;
 	const char *out;
 	int have_board, quiet;
+	bool refused; /* an output the policy refused: a usage error */
 };
 
 static int parse_own(int id, const char *arg, void *ctx)
@@ -176,6 +178,23 @@ static void print_result(const struct cli *c, const struct mvod_calib_result *r)
 	       c->o.report ? c->o.report : "");
 }
 
+/*
+ * --out and --report by the output policy once the source is open and its files are noted as
+ * inputs (an --out naming a frame is refused), before a frame is read: found out now, not
+ * after an hour of video.
+ */
+static int check_outputs(void *ctx, char *err, size_t errlen)
+{
+	struct cli *c = ctx;
+	char target[4096];
+	int ret = mvod_output_check("--out", c->out, target, sizeof(target), NULL, err, errlen);
+	if (!ret && c->o.report)
+		ret = mvod_output_check("--report", c->o.report, target, sizeof(target), NULL, err,
+					errlen);
+	c->refused = ret != 0;
+	return ret;
+}
+
 int mvod_cmd_calibrate(int argc, char **argv)
 {
 	struct cli c = {0};
@@ -183,18 +202,20 @@ int mvod_cmd_calibrate(int argc, char **argv)
 	if (ret)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	cli_quiet_libraries();
-	/* Found out now, not after an hour of video. */
+	/* A folder or a folder that cannot be written in: refused before the source opens too. */
 	if (cli_check_writable("--out", c.out) || (c.o.report && cli_check_writable("--report", c.o.report)))
-		return EXIT_FAILURE;
+		return EXIT_USAGE;
+	c.o.check_outputs = check_outputs;
+	c.o.check_ctx = &c;
 	/* A live camera never ends: the first Ctrl-C ends the recording and works on it. */
 	c.o.stop = cli_stop_on_interrupt();
 	struct mvod_calib_result res;
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	ret = mvod_calibrate(&c.o, &res, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s", err);
 		mvod_calib_result_free(&res);
-		return EXIT_FAILURE;
+		return c.refused ? EXIT_USAGE : EXIT_FAILURE;
 	}
 	struct mvod_calib_meta meta;
 	mvod_calib_result_meta(&res, &c.o, &meta);

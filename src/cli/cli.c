@@ -12,6 +12,7 @@
 #include "mvod/board.h"
 #include "mvod/capture.h"
 #include "mvod/log.h"
+#include "mvod/pipeline.h"
 #include "util/output.h"
 
 const char *cli_prog = "mvod";
@@ -101,11 +102,19 @@ int cli_parse_board(const char *s, struct mvod_board *b)
 
 int cli_check_writable(const char *opt, const char *path)
 {
-	char target[4096], err[1024];
+	char target[4096], err[MVOD_ERR_MAX];
 	int ret = mvod_output_check(opt, path, target, sizeof(target), NULL, err, sizeof(err));
 	if (ret)
 		fprintf(stderr, "%s: %s\n", cli_prog, err);
 	return ret;
+}
+
+int cli_run_status(int ret, const struct mvod_run_summary *s)
+{
+	if (!ret)
+		return EXIT_SUCCESS;
+	/* An unknown scheme is the URI's fault, as everything the run found before a frame. */
+	return s->config_failed || ret == -EPROTONOSUPPORT ? EXIT_USAGE : EXIT_FAILURE;
 }
 
 void cli_usage_input(FILE *out)

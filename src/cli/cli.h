@@ -11,14 +11,22 @@
 #include <stdio.h>
 
 #include "mvod/config.h"
+#include "util/errbuf.h"
 
-#define EXIT_USAGE 2
 /*
- * mvod run: the configuration names a calibration that is missing, unreadable or does not fit
- * the camera. Distinct from 1 (a camera absent at boot, which a restart may fix), and in the
- * unit's RestartPreventExitStatus=, so the service stops instead of restarting every 5 s.
+ * Exit status by cause, the same for every command: 0 success; EXIT_FAILURE (1) a run-time
+ * fault, which a restart may fix (a camera absent at boot, a write that failed, a source that
+ * broke off); EXIT_USAGE (2) a usage or configuration error, which only an edit fixes (a bad
+ * flag or config file; a calibration, ground truth or --scale source that cannot serve; an
+ * output the policy refuses at start). mvod.service does not restart on 2
+ * (RestartPreventExitStatus=2), so a bad configuration stops it instead of a restart every
+ * 5 s.
  */
-#define EXIT_CONFIG 3
+#define EXIT_USAGE 2
+
+/* The exit status of mvod_run's ret and summary (mvod run, mvod bench), by the cause above. */
+struct mvod_run_summary;
+int cli_run_status(int ret, const struct mvod_run_summary *s);
 
 /* Prints "mvod CMD: --opt val: expected want" and returns -EINVAL. */
 int cli_bad_value(const char *opt, const char *val, const char *want);

@@ -44,7 +44,7 @@ static void usage(FILE *out)
 "  mvod calib-convert calib.json cam.yaml --to ros\n"
 "\n"
 "OUT is replaced whole or not at all. Exit status: 0 on success, 1 when IN cannot be read or\n"
-"OUT cannot be written, 2 on a usage error.\n");
+"OUT cannot be written, 2 on a usage error (OUT refused at start: a folder, IN itself).\n");
 }
 
 enum convert_opt_id { OPT_TO = CLI_OPT_OWN, OPT_SIZE };
@@ -144,7 +144,7 @@ static int apply_size(const struct convert *c, struct mvod_camera *cam)
 	if (c->width && cam->width && (c->width != cam->width || c->height != cam->height)) {
 		fprintf(stderr, "%s: %s is for %dx%d images, not --size %dx%d\n", cli_prog, c->in,
 			cam->width, cam->height, c->width, c->height);
-		return 1;
+		return EXIT_USAGE;
 	}
 	if (c->width) {
 		cam->width = c->width;
@@ -186,7 +186,7 @@ int mvod_cmd_convert(int argc, char **argv)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	struct mvod_camera cam;
 	enum mvod_calib_format from;
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	if (mvod_calib_load_format(c.in, &cam, &from, err, sizeof(err))) {
 		fprintf(stderr, "%s: %s\n", cli_prog, err);
 		return 1;
@@ -194,7 +194,7 @@ int mvod_cmd_convert(int argc, char **argv)
 	print_camera(c.in, from, &cam);
 	/* IN is noted as an input now: OUT may not be it, nor a directory, nor a disk. */
 	if (cli_check_writable("OUT", c.out))
-		return 1;
+		return EXIT_USAGE;
 	ret = apply_size(&c, &cam);
 	if (ret)
 		return ret;

@@ -168,7 +168,7 @@ static int open_camera(const struct cli *c, struct mvod_camera *cam, char **text
 			   "to measure without writing", c->calib, strerror(-ret));
 		return ret;
 	}
-	ret = mvod_read_file(c->calib, CAMERA_FILE_MAX_BYTES, "camera file", text, NULL, err,
+	ret = mvod_read_file(c->calib, CAMERA_FILE_MAX_BYTES, "camera file", 0, text, NULL, err,
 			     sizeof(err));
 	if (!ret && fmt != MVOD_CALIB_FMT_MVOD)
 		ret = check_editable(c->calib, *text, err, sizeof(err));
@@ -184,7 +184,7 @@ static int open_camera(const struct cli *c, struct mvod_camera *cam, char **text
 static int update_camera(const struct cli *c, const char *text, const struct mvod_mount *m)
 {
 	char *now = NULL, err[1024];
-	int ret = mvod_read_file(c->calib, CAMERA_FILE_MAX_BYTES, "camera file", &now, NULL, err,
+	int ret = mvod_read_file(c->calib, CAMERA_FILE_MAX_BYTES, "camera file", 0, &now, NULL, err,
 				 sizeof(err));
 	if (!ret && strcmp(now, text) != 0)
 		ret = mvod_errf(err, sizeof(err), -ESTALE, "%s changed while mvod mount ran: "

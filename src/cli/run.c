@@ -15,20 +15,40 @@
 #include "mvod/log.h"
 #include "mvod/pipeline.h"
 #include "util/notify.h"
+#include "util/output.h"
 
-static volatile sig_atomic_t stop_requested, reopen_requested;
+static volatile sig_atomic_t stop_requested, reopen_requested, running;
 
 /*
  * The first SIGINT or SIGTERM asks for a clean stop: the frame in hand is finished, outputs
  * flushed and closed, a last status published. A second one ends mvod at once; that leaves
- * nothing partial in the trajectory, whose every line is a single write(2).
+ * nothing partial in the trajectory, whose every line is a single write(2). Before the frame
+ * loop runs and while no output is open (start-up: the configuration, a calibration, a ground
+ * truth or a source that takes long to read, a FIFO that never delivers), there is nothing
+ * to finish or close: the signal's own action ends mvod at once (it waited for the work to
+ * end, 13 minutes for one YAML file, and systemd's stop timed out).
  */
 static void on_stop(int sig)
 {
 	if (stop_requested)
 		_exit(128 + sig);
+	if (!running && !mvod_outputs_open()) {
+		signal(sig, SIG_DFL);
+		raise(sig);
+		return;
+	}
 	stop_requested = 1;
 }
+
+/* The frame loop turns: from now on a stop is a clean one. A sink of mvod run's own. */
+static void loop_runs(void *ctx, bool reopen)
+{
+	(void)ctx;
+	(void)reopen;
+	running = 1;
+}
+
+static const struct mvod_sink_ops running_ops = {.name = "running", .between = loop_runs};
 
 static void on_hup(int sig)
 {
@@ -117,8 +137,11 @@ static void usage(FILE *out)
 "       --trajectory out.kitti --format kitti --plot out.png --lcm-url memq://\n"
 "  mvod --config /etc/mvod/mvod.conf --log-level debug --print-config\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error, 3 when the\n"
-"calibration is missing, unreadable or does not fit the camera (the service then stops).\n");
+"Exit status: 0 on success; 1 on a run-time fault, which a restart may fix (a camera\n"
+"absent, a write that failed, a source that broke off); 2 on a usage or configuration\n"
+"error, which only an edit fixes (a bad flag or config file; a calibration, ground truth\n"
+"or speed source that cannot serve; an output refused at start). The service does not\n"
+"restart on 2.\n");
 }
 
 enum run_opt_id { OPT_CONFIG = CLI_OPT_OWN, OPT_PRINT_CONFIG, OPT_LIST_CAMERAS };
@@ -150,7 +173,7 @@ static int parse_own(int id, const char *arg, void *ctx)
 /* The config file when there is one, the flags over it. -EINVAL after saying what is wrong. */
 static int load_config(struct cli *c, struct mvod_config *cfg)
 {
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	mvod_config_default(cfg);
 	if (c->config && mvod_config_load(c->config, cfg, err, sizeof(err))) {
 		fprintf(stderr, "%s: --config: %s\n", cli_prog, err);
@@ -269,16 +292,22 @@ static int run(struct mvod_config *cfg)
 	/* --scale external reads speed where mvod publishes unless told otherwise. */
 	if (!cfg->run.speed_url && cfg->lcm_enabled)
 		cfg->run.speed_url = cfg->lcm_url ? cfg->lcm_url : "";
+	struct mvod_sink mark = {&running_ops, NULL};
+	cfg->run.sinks = &mark;
+	cfg->run.n_sinks = 1;
 	struct mvod_run_summary sum;
 	int ret = mvod_run(&cfg->run, ipc, &stop_requested, &sum);
 	mvod_ipc_destroy(ipc);
 	if (!cfg->quiet && !ret)
 		print_summary(cfg, &sum);
-	if (ret && sum.calib_failed) /* systemctl status shows it beside "status=3" */
+	if (ret && sum.calib_failed) /* systemctl status shows it beside "status=2" */
 		mvod_notify_status(true, "stopped: the calibration %s is unusable (see the log): "
 					 "fix [calibration] file, then restart",
 				   cfg->run.calib ? cfg->run.calib : "(none given)");
-	return !ret ? EXIT_SUCCESS : sum.calib_failed ? EXIT_CONFIG : EXIT_FAILURE;
+	else if (ret && sum.config_failed)
+		mvod_notify_status(true, "stopped: the configuration cannot run (see the log): "
+					 "fix it, then restart");
+	return cli_run_status(ret, &sum);
 }
 
 int mvod_cmd_run(int argc, char **argv)

@@ -71,7 +71,8 @@ static void usage(FILE *out)
 "  mvod view --lcm-url 'udpm://239.255.76.67:7667?ttl=0'\n"
 "  mvod view --lcm-url 'file:///tmp/run.lcmlog?mode=r&speed=0' --png path.png --every 100\n"
 "\n"
-"Exit status: 0 on success, 1 on a runtime failure, 2 on a usage error.\n");
+"Exit status: 0 on success, 1 on a run-time fault, 2 on a usage error (--png refused at\n"
+"start too).\n");
 }
 
 enum view_opt_id {
@@ -253,7 +254,7 @@ static int run_headless(struct viewer *w)
 /* Messages are handled between redraws; after the end of a log the picture stays. */
 static int run_window(struct viewer *w)
 {
-	char err[512];
+	char err[MVOD_ERR_MAX];
 	int ret = mvod_view_display_check(err, sizeof(err));
 	if (!ret)
 		ret = mvod_view_window_open(WINDOW_NAME, err, sizeof(err));
@@ -361,6 +362,9 @@ static void print_summary(const struct viewer *w)
 		printf(" (end of log, cut short at byte %lld)\n", (long long)w->cut_at);
 	else
 		printf("%s\n", w->end_of_log ? " (end of log)" : "");
+	if (w->view.refused)
+		LOG(WARN, "%lld pose messages held no pose and are not drawn; the first, %s",
+		    (long long)w->view.refused, w->view.refused_why);
 }
 
 static int view(const struct cli *c)
@@ -396,7 +400,7 @@ int mvod_cmd_view(int argc, char **argv)
 		return ret > 0 ? 0 : EXIT_USAGE;
 	if (c.png && (note_log(c.url ? c.url : getenv("LCM_DEFAULT_URL")) ||
 		      cli_check_writable("--png", c.png)))
-		return EXIT_FAILURE;
+		return EXIT_USAGE;
 	/* No SA_RESTART: the signal interrupts LCM's wait at once. */
 	struct sigaction sa = {.sa_handler = on_signal};
 	sigaction(SIGINT, &sa, NULL);

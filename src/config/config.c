@@ -11,6 +11,7 @@
 
 #include "util/body_frame.h"
 #include "util/errbuf.h"
+#include "util/input.h"
 #include "util/read_file.h"
 
 /* Enum fields are written through an int. */
@@ -371,7 +372,8 @@ int mvod_config_load(const char *path, struct mvod_config *out, char *err, size_
 	char *text = NULL;
 	size_t len = 0;
 	mvod_config_default(out);
-	int ret = mvod_read_file(path, 1 << 20, "config file", &text, &len, err, errlen);
+	int ret = mvod_read_file(path, 1 << 20, "config file", MVOD_INPUT_STREAM, &text, &len, err,
+				 errlen);
 	if (ret)
 		return ret;
 	ret = mvod_config_parse_buffer(path, text, len, out, err, errlen);

@@ -346,6 +346,11 @@ void mvod_status_to_msg(const struct mvod_status *st, mvod_status2_t *msg)
 	};
 }
 
+int mvod_run_state_from_wire(int state)
+{
+	return state >= MVOD_RUN_STARTING && state <= MVOD_RUN_STOPPING ? state : MVOD_RUN_UNKNOWN;
+}
+
 void mvod_status_from_msg(const mvod_status2_t *msg, struct mvod_status *st)
 {
 	*st = (struct mvod_status){
@@ -360,7 +365,7 @@ void mvod_status_from_msg(const mvod_status2_t *msg, struct mvod_status *st)
 		.dropped = msg->dropped_frames,
 		.rss_kb = msg->rss_kb,
 		.uptime_s = msg->uptime_s,
-		.state = (enum mvod_run_state)msg->state,
+		.state = (enum mvod_run_state)mvod_run_state_from_wire(msg->state),
 		.faults = msg->faults,
 		.map_points = msg->map_points,
 		.keyframes = msg->keyframes,

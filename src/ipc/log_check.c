@@ -6,13 +6,14 @@
 #include "ipc/log_check.h"
 
 #include <errno.h>
-#include <fcntl.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include "util/errbuf.h"
+#include "util/input.h"
 
 #define SYNC 0xEDA1DA01u
 #define HEADER_BYTES 28
@@ -110,11 +111,13 @@ int mvod_lcmlog_check(int fd, struct mvod_lcmlog_check *out)
 
 int mvod_lcmlog_vet(const char *path, struct mvod_lcmlog_check *out, char *err, size_t errlen)
 {
-	/* O_NONBLOCK: a FIFO named as the log must not block the open. */
-	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-	int ret = fd < 0 ? -errno : mvod_lcmlog_check(fd, out);
-	if (fd >= 0)
-		close(fd);
+	/* An input (no output of this run may be it), and a regular file: it is read by offset. */
+	struct mvod_input in;
+	int ret = mvod_input_open(&in, path, "LCM log", 0, SIZE_MAX, err, errlen);
+	if (ret)
+		return ret;
+	ret = mvod_lcmlog_check(in.fd, out);
+	mvod_input_close(&in);
 	if (ret)
 		return mvod_errf(err, errlen, ret, "cannot read log %s: %s", path, strerror(-ret));
 	if (out->events == 0 && (out->bad_offset < 0 || out->cut))

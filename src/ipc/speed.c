@@ -53,7 +53,7 @@ static void take(struct mvod_speed *s, const void *data, size_t len)
 		return;
 	}
 	const struct sample *last = s->n ? nth_newest(s, 0) : NULL;
-	if (last && m.utime <= last->utime) {
+	if ((last && m.utime <= last->utime) || m.utime < 0 || m.utime > MVOD_SPEED_MAX_UTIME) {
 		s->counts.bad_time++;
 		s->counts.last_bad_utime = m.utime;
 		return;
@@ -163,7 +163,8 @@ static void pull(struct mvod_speed *s, int64_t utime)
 int mvod_speed_odometer(struct mvod_speed *s, int64_t utime, double *metres)
 {
 	pull(s, utime);
-	if (!s->n)
+	/* Outside the samples' range a frame is stale by far; inside, no difference overflows. */
+	if (!s->n || utime < -MVOD_SPEED_MAX_UTIME || utime > 2 * MVOD_SPEED_MAX_UTIME)
 		return -EAGAIN;
 	int k = 0; /* the newest sample at or before utime is nth_newest(k) */
 	while (k < s->n - 1 && nth_newest(s, k)->utime > utime)

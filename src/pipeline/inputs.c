@@ -11,7 +11,7 @@
 
 static int open_camera(struct run *r)
 {
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	const struct mvod_run_opts *o = r->o;
 	if (o->calib) {
 		int ret = mvod_calib_load(o->calib, &r->cam, err, sizeof(err));
@@ -53,7 +53,7 @@ static int open_camera(struct run *r)
 /* --gt FILE, or else the ground truth the dataset carries (KITTI poses/, EuRoC, TUM). */
 static int open_gt(struct run *r)
 {
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	const struct mvod_run_opts *o = r->o;
 	int ret;
 	if (o->gt) {
@@ -85,7 +85,7 @@ static int open_gt(struct run *r)
 static int check_output_frame(struct run *r)
 {
 	const struct mvod_run_opts *o = r->o;
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	int ret = mvod_body_frame_init(o->axes, o->camera_to_body, &r->body, err, sizeof(err));
 	if (ret) {
 		LOG(ERROR, "%s", err);
@@ -138,7 +138,7 @@ static int open_scale(struct run *r)
 			   "read it where mvod publishes");
 		return -EINVAL;
 	}
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	int ret = mvod_speed_create(o->speed_url, o->speed_channel, &r->speed, err, sizeof(err));
 	if (ret)
 		LOG(ERROR, "--speed-url: %s", err);
@@ -166,7 +166,7 @@ static int check_frames(const struct mvod_vo_params *params, const struct mvod_c
 
 int mvod_run_open_inputs(struct run *r)
 {
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	const struct mvod_run_opts *o = r->o;
 	int ret = mvod_source_open(o->source, &r->src, err, sizeof(err));
 	if (ret) {
@@ -277,8 +277,9 @@ static void log_refused_speed(struct run *r)
 			  "refused; publish mvod.speed_t there or name its channel with "
 			  "--speed-channel", ch);
 	if (c.bad_time && !r->speed_refused.bad_time)
-		LOG(WARN, "an mvod.speed_t on %s has utime %lld, not after the one before: refused "
-			  "(times must increase; later ones are only counted)", ch,
+		LOG(WARN, "an mvod.speed_t on %s has utime %lld, not after the one before or not "
+			  "in 0 .. 2^61 us: refused (times must increase; later ones are only "
+			  "counted)", ch,
 		    (long long)c.last_bad_utime);
 	if (c.bad_value && !r->speed_refused.bad_value)
 		LOG(WARN, "an mvod.speed_t on %s has a speed or distance that is not finite or "

@@ -4,6 +4,7 @@
 #include <errno.h>
 
 #include "mvod/log.h"
+#include "util/errbuf.h"
 #include "util/output.h"
 
 /* Appends a sink made by the caller of mvod_run (owned false) or here (true), after ret 0. */
@@ -30,7 +31,7 @@ static int add_sink(struct run *r, int ret, const struct mvod_sink *made, bool o
 int mvod_run_open_outputs(struct run *r)
 {
 	const struct mvod_run_opts *o = r->o;
-	char err[512] = "", target[4096];
+	char err[MVOD_ERR_MAX] = "", target[4096];
 	int ret = o->plot ? mvod_output_check("--plot", o->plot, target, sizeof(target), NULL, err,
 					      sizeof(err))
 			  : 0;

@@ -238,6 +238,7 @@ int mvod_run(const struct mvod_run_opts *opts, struct mvod_ipc *ipc, volatile si
 	int ret = mvod_run_open_inputs(&r);
 	if (!ret)
 		ret = mvod_run_open_outputs(&r);
+	summary->config_failed = ret && r.src && ret != -ENOMEM;
 	if (!ret) {
 		r.t_start = mvod_now_s();
 		ret = r.info.live ? live_loop(&r, stop) : loop(&r, stop);

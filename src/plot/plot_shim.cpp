@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "util/errbuf.h"
 #include "util/image_file.h"
 #include "util/shim_guard.hpp"
 
@@ -696,6 +697,19 @@ extern "C" int mvod_plot_topdown(const char *path, const char *title, const doub
 		return -EINVAL;
 	return mvod_guarded([&] {
 		return plot_topdown(path, title, {est_xyz, n_est}, heading, {gt_xyz, n_gt}, unit);
+	});
+}
+
+extern "C" int mvod_plot_check(const char *what, const char *path, char *err, size_t errlen)
+{
+	return mvod_guarded([&] {
+		if (can_write(path))
+			return 0;
+		std::string ext = extension_of(path);
+		std::string why = ext.empty() ? "no extension names the image format"
+					      : "OpenCV writes no " + ext + " images";
+		return mvod_errf(err, errlen, -EINVAL, "%s %s: %s: name a FILE.png (or .jpg, .bmp, "
+				 ".tif, .ppm)", what, path, why.c_str());
 	});
 }
 

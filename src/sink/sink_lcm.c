@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "mvod/log.h"
+#include "util/errbuf.h"
 #include "mvod_status_t.h"
 
 struct lcm_sink {
@@ -45,7 +46,7 @@ static void lcm_between(void *ctx, bool reopen)
 	struct lcm_sink *s = ctx;
 	if (!reopen || !mvod_ipc_log_path(s->ipc))
 		return;
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	if (mvod_ipc_reopen_log(s->ipc, err, sizeof(err)))
 		LOG(ERROR, "cannot reopen LCM log: %s; still writing to the file open before", err);
 	else

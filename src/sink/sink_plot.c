@@ -2,6 +2,7 @@
 #include "eval_sink.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,6 +42,12 @@ static const struct mvod_sink_ops plot_ops = {
 int mvod_sink_plot_create(const char *path, const char *source, bool gt_scale,
 			  const struct mvod_sink *eval, struct mvod_sink *out)
 {
+	char err[PATH_MAX + 128];
+	int ret = mvod_plot_check("--plot", path, err, sizeof(err));
+	if (ret) {
+		LOG(ERROR, "%s", err);
+		return ret;
+	}
 	struct plot_sink *p = calloc(1, sizeof(*p));
 	if (!p)
 		return -ENOMEM;

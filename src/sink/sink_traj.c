@@ -35,7 +35,7 @@ static void traj_between(void *ctx, bool reopen)
 	struct traj_sink *s = ctx;
 	if (!reopen)
 		return;
-	char err[512] = "";
+	char err[MVOD_ERR_MAX] = "";
 	int ret = mvod_traj_writer_reopen(s->w, err, sizeof(err));
 	if (ret)
 		LOG(ERROR, "cannot reopen trajectory: %s; still writing to the file open before", err);

@@ -10,7 +10,7 @@
 
 #include "util/errbuf.h"
 #include "util/output.h"
-#include "util/read_file.h"
+#include "util/lines.h"
 
 const char *const mvod_traj_format_names[] = {"tum", "kitti", NULL};
 
@@ -115,37 +115,65 @@ static int parse_numbers(const char *line, double *v, int max)
 	return *s ? -1 : n;
 }
 
-static void pose_from_numbers(enum mvod_traj_format fmt, const double *v, double *t,
-			      struct mvod_pose *p)
+/* Finite, and on Earth. */
+static int check_position(const double t[3], char *why, size_t whylen)
 {
-	if (fmt == MVOD_TRAJ_KITTI) {
-		*t = 0;
-		for (int r = 0; r < 3; r++) {
-			memcpy(p->R + 3 * r, v + 4 * r, 3 * sizeof(double));
-			p->t[r] = v[4 * r + 3];
-		}
-		return;
-	}
-	*t = v[0];
-	memcpy(p->t, v + 1, 3 * sizeof(double));
-	double q[4] = {v[7], v[4], v[5], v[6]};
-	mvod_quat_to_rot(q, p->R);
+	double n = hypot(hypot(t[0], t[1]), t[2]); /* no overflow on the way to 1e308 */
+	if (n <= MVOD_POSE_MAX_M)
+		return 0;
+	return mvod_errf(why, whylen, -EINVAL, "position (%g %g %g) m is %s: no pose on Earth is "
+			 "more than %g m from the origin", t[0], t[1], t[2],
+			 isfinite(n) ? "that far" : "not finite", MVOD_POSE_MAX_M);
 }
 
-/*
- * A TUM line's quaternion (v[4..7] = qx qy qz qw) must be of unit length: any tool writes it
- * so to the digits it prints, and one 10 % off is a column mix-up or a zero, not a rotation
- * (a zero quaternion would give NaN poses in every error).
- */
-static int check_quaternion(const char *path, int lineno, const double *v, char *err,
-			    size_t errlen)
+int mvod_pose_from_quat(const double t[3], const double q[4], struct mvod_pose *p, char *why,
+			size_t whylen)
 {
-	double len = sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
-	if (fabs(len - 1) <= 0.1)
-		return 0;
-	return mvod_errf(err, errlen, -EINVAL, "%s:%d: quaternion (qx qy qz qw) = (%g %g %g %g) "
-			 "has length %g, not 1: no rotation (TUM: t tx ty tz qx qy qz qw)", path,
-			 lineno, v[4], v[5], v[6], v[7], len);
+	int ret = check_position(t, why, whylen);
+	double len = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+	if (!ret && !(fabs(len - 1) <= MVOD_POSE_UNIT_TOL))
+		ret = mvod_errf(why, whylen, -EINVAL, "quaternion (qx qy qz qw) = (%g %g %g %g) "
+				"has length %g, not 1 (within %g): no rotation", q[1], q[2], q[3],
+				q[0], len, MVOD_POSE_UNIT_TOL);
+	if (ret)
+		return ret;
+	memcpy(p->t, t, sizeof(p->t));
+	mvod_quat_to_rot(q, p->R);
+	return 0;
+}
+
+int mvod_pose_from_matrix(const double rt[12], struct mvod_pose *p, char *why, size_t whylen)
+{
+	struct mvod_pose m;
+	for (int r = 0; r < 3; r++) {
+		memcpy(m.R + 3 * r, rt + 4 * r, 3 * sizeof(double));
+		m.t[r] = rt[4 * r + 3];
+	}
+	int ret = check_position(m.t, why, whylen);
+	double RtR[9], off = 0, det = mvod_mat3_det(m.R);
+	mvod_mat3_mul_at(m.R, m.R, RtR);
+	for (int k = 0; k < 9; k++)
+		off = fmax(off, fabs(RtR[k] - (k % 4 == 0)));
+	/* A nan anywhere in R makes det nan, which no comparison passes. */
+	if (!ret && !(off <= MVOD_POSE_UNIT_TOL && det > 0))
+		ret = mvod_errf(why, whylen, -EINVAL, "rotation [%g %g %g; %g %g %g; %g %g %g] is "
+				"no rotation: R^T R is %g off the identity (within %g), det R = %g",
+				m.R[0], m.R[1], m.R[2], m.R[3], m.R[4], m.R[5], m.R[6], m.R[7],
+				m.R[8], off, MVOD_POSE_UNIT_TOL, det);
+	if (!ret)
+		*p = m;
+	return ret;
+}
+
+/* A line's numbers (v: 8 of TUM or 12 of KITTI) into t and p; -EINVAL with why. */
+static int pose_from_numbers(enum mvod_traj_format fmt, const double *v, double *t,
+			     struct mvod_pose *p, char *why, size_t whylen)
+{
+	*t = fmt == MVOD_TRAJ_KITTI ? 0 : v[0];
+	if (fmt == MVOD_TRAJ_KITTI)
+		return mvod_pose_from_matrix(v, p, why, whylen);
+	const double q[4] = {v[7], v[4], v[5], v[6]};
+	return mvod_pose_from_quat(v + 1, q, p, why, whylen);
 }
 
 static int traj_push(struct mvod_traj *tr, int *cap, double t, const struct mvod_pose *p)
@@ -204,20 +232,21 @@ static int load_line(void *ctx, char *line, size_t lineno, char *err, size_t err
 	}
 	if (n != l->cols)
 		return bad_line(l->path, (int)lineno, l->cols, n, err, errlen);
-	int ret = l->cols == 8 ? check_quaternion(l->path, (int)lineno, v, err, errlen) : 0;
-	if (ret)
-		return ret;
 	double t;
 	struct mvod_pose p;
-	pose_from_numbers(l->tr.format, v, &t, &p);
+	char why[256];
+	if (pose_from_numbers(l->tr.format, v, &t, &p, why, sizeof(why)))
+		return mvod_errf(err, errlen, -EINVAL, "%s:%zu: %s (%s)", l->path, lineno, why,
+				 l->cols == 8 ? "TUM: t tx ty tz qx qy qz qw"
+					      : "KITTI: a row-major 3x4 pose");
 	return traj_push(&l->tr, &l->cap, t, &p);
 }
 
 int mvod_traj_load(const char *path, struct mvod_traj *out, char *err, size_t errlen)
 {
-	/* Ground truth is an input: mvod_read_lines notes it, so no output of this run may be it. */
+	/* Ground truth is an input: the line reader notes it, so no output of the run may be it. */
 	struct loader l = {.path = path};
-	int ret = mvod_read_lines(path, load_line, &l, err, errlen);
+	int ret = mvod_lines_each(path, "trajectory", load_line, &l, err, errlen);
 	if (!ret && l.tr.n == 0)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s: no poses (an empty file, or only comments)",
 				path);

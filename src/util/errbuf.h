@@ -9,6 +9,12 @@ extern "C" {
 #endif
 
 /*
+ * Room for a reason: two paths of any length (a file and the folder it names) and the words
+ * around them. 512 bytes cut the reason off a path of 450 characters.
+ */
+#define MVOD_ERR_MAX (2 * 4096 + 512)
+
+/*
  * Formats the reason into err (when err is non-NULL and errlen > 0), control characters as
  * spaces, and returns code.
  */

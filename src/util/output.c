@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <limits.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -147,9 +148,8 @@ static int kind_of(const char *what, const char *path, const struct stat *st,
 	if (is_input(st))
 		return mvod_errf(err, errlen, -EEXIST, "%s %s is a file this run reads (its source, a "
 				 "frame, times.txt, the calibration, the ground truth, the "
-				 "configuration or the LCM log it replays): mvod never writes over its "
-				 "input; name another file",
-				 what, path);
+				 "configuration, or an LCM log it replays or reads speed from): "
+				 "mvod never writes over its input; name another file", what, path);
 	return 0;
 }
 
@@ -209,6 +209,14 @@ int mvod_output_check(const char *what, const char *path, char *target, size_t t
 }
 
 /* --- stream outputs --- */
+
+/* Stream outputs open now, read by signal handlers. */
+static volatile sig_atomic_t streams_open;
+
+bool mvod_outputs_open(void)
+{
+	return streams_open > 0;
+}
 
 struct mvod_output {
 	int fd;
@@ -280,6 +288,7 @@ int mvod_output_open(const char *what, const char *path, struct mvod_output **ou
 		return ret;
 	}
 	o->truncate_pending = o->regular;
+	streams_open++;
 	*out = o;
 	return 0;
 }
@@ -348,5 +357,6 @@ int mvod_output_close(struct mvod_output *o)
 	int ret = sync_close(o->fd);
 	ret = o->error ? o->error : ret;
 	free(o);
+	streams_open--;
 	return ret;
 }

@@ -78,6 +78,11 @@ int mvod_output_write(struct mvod_output *o, const void *buf, size_t len);
 int mvod_output_reopen(struct mvod_output *o, char *err, size_t errlen);
 /* fsyncs (where the file can be) and closes; the first error of any write or this. NULL: 0. */
 int mvod_output_close(struct mvod_output *o);
+/*
+ * Whether a stream output is open: a signal handler may call it (it reads one sig_atomic_t).
+ * mvod run's stop handler ends a start-up at once while none is, with nothing to close.
+ */
+bool mvod_outputs_open(void);
 
 #ifdef __cplusplus
 }

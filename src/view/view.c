@@ -45,17 +45,23 @@ static void update_rate(struct mvod_view *v, int64_t recv_us)
 
 static void note_state(struct mvod_view *v, int state)
 {
-	v->state = (enum mvod_run_state)state;
-	if (state != MVOD_RUN_STOPPING)
+	v->state = (enum mvod_run_state)mvod_run_state_from_wire(state);
+	if (v->state != MVOD_RUN_STOPPING)
 		v->last_state = v->state;
 }
 
 void mvod_view_add_pose2(struct mvod_view *v, const mvod_pose2_t *msg, int64_t recv_us)
 {
 	v->v2 = true;
+	/* No pose (nan, a zero quaternion): drawn, it would make the path and the heading nan. */
+	char why[192];
+	if (mvod_pose_from_quat(msg->position, msg->orientation, &v->pose, why, sizeof(why))) {
+		if (v->refused++ == 0)
+			snprintf(v->refused_why, sizeof(v->refused_why), "frame %lld: %s",
+				 (long long)msg->frame, why);
+		return;
+	}
 	v->poses++;
-	memcpy(v->pose.t, msg->position, sizeof(v->pose.t));
-	mvod_quat_to_rot(msg->orientation, v->pose.R);
 	v->frame = msg->frame;
 	note_state(v, msg->state);
 	v->tracked += msg->state == MVOD_RUN_TRACKING;

@@ -1,7 +1,9 @@
 #include "harness.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <poll.h>
 #include <signal.h>
@@ -11,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -171,6 +174,39 @@ int harness_run_reader_gone(char *const argv[], const char *err_path, int *statu
 	pid_t pid = spawn(argv, fds[1], err_path);
 	close(fds[1]);
 	return harness_wait(pid, status);
+}
+
+/* Whether pid has path open (the same device and inode among its descriptors). */
+static bool holds_open(pid_t pid, const char *path)
+{
+	struct stat want, st;
+	char dir[64], fd_path[600];
+	assert_int_equal(stat(path, &want), 0);
+	snprintf(dir, sizeof(dir), "/proc/%d/fd", (int)pid);
+	DIR *d = opendir(dir);
+	bool found = false;
+	for (struct dirent *e = d ? readdir(d) : NULL; e && !found; e = readdir(d)) {
+		snprintf(fd_path, sizeof(fd_path), "%s/%s", dir, e->d_name);
+		found = stat(fd_path, &st) == 0 && st.st_dev == want.st_dev && st.st_ino == want.st_ino;
+	}
+	if (d)
+		closedir(d);
+	return found;
+}
+
+void harness_wait_open(pid_t pid, const char *path)
+{
+	char exe[64], self[PATH_MAX] = "", want[PATH_MAX];
+	snprintf(exe, sizeof(exe), "/proc/%d/exe", (int)pid);
+	assert_non_null(realpath(harness_bin("MVOD"), want));
+	int st;
+	for (ssize_t n = 0; n <= 0 || strcmp(self, want) != 0 || !holds_open(pid, path);) {
+		n = readlink(exe, self, sizeof(self) - 1);
+		self[n > 0 ? n : 0] = '\0';
+		if (waitpid(pid, &st, WNOHANG) == pid)
+			fail_msg("mvod ended (%d) before it opened %s", st, path);
+		usleep(1000);
+	}
 }
 
 int harness_wait(pid_t pid, int *status)

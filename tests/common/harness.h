@@ -46,6 +46,11 @@ void harness_cleanup(void);
 int harness_teardown(void **state);
 /* Starts argv in the background, stdout and stderr into files (NULL: /dev/null). */
 pid_t harness_spawn(char *const argv[], const char *out_path, const char *err_path);
+/*
+ * Waits until pid is mvod (harness_bin("MVOD"): not the forked test before exec, which still
+ * holds the test's descriptors) and holds path open; fails the test if pid ends first.
+ */
+void harness_wait_open(pid_t pid, const char *path);
 /* Waits for pid; 1 with its exit status in *status, or 0 with the signal that killed it. */
 int harness_wait(pid_t pid, int *status);
 /*

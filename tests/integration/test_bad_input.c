@@ -80,7 +80,7 @@ static void test_missing_file(void **state)
 static void test_unknown_scheme(void **state)
 {
 	(void)state;
-	expect_failure("rtsp://camera/stream", calib, 1, "rtsp");
+	expect_failure("rtsp://camera/stream", calib, 2, "rtsp");
 }
 
 static void test_no_source(void **state)
@@ -100,20 +100,20 @@ static void test_corrupt_video(void **state)
 static void test_calibration_missing(void **state)
 {
 	(void)state;
-	expect_failure(video, "/nonexistent/calib.json", 3, "/nonexistent/calib.json");
-	expect_failure(video, NULL, 3, "--calib");
+	expect_failure(video, "/nonexistent/calib.json", 2, "/nonexistent/calib.json");
+	expect_failure(video, NULL, 2, "--calib");
 }
 
 static void test_calibration_malformed(void **state)
 {
 	(void)state;
 	expect_failure(video, write_file("bad.json", "{\"format\": \"mvod-calibration/1\", \"model\""),
-		       3, "bad.json");
+		       2, "bad.json");
 	expect_failure(video, write_file("bad2.json",
 					 "{\"format\": \"mvod-calibration/1\", \"model\": "
 					 "\"pinhole-radtan\", \"image_size\": [640, 480], \"K\": "
 					 "[[0,0,320],[0,500,240],[0,0,1]], \"distortion\": []}"),
-		       3, "\"K\"");
+		       2, "\"K\"");
 }
 
 static void test_size_mismatch(void **state)
@@ -123,7 +123,7 @@ static void test_size_mismatch(void **state)
 					 "{\"format\": \"mvod-calibration/1\", \"model\": "
 					 "\"pinhole-radtan\", \"image_size\": [320, 240], \"K\": "
 					 "[[300,0,160],[0,300,120],[0,0,1]], \"distortion\": []}"),
-		       3, "320x240");
+		       2, "320x240");
 }
 
 static void test_bad_option_values(void **state)

@@ -41,7 +41,7 @@ static void render(const char *dir, const char *distortion)
 static int used_frames(const char *path, int *frames, int max)
 {
 	char err[256], *text;
-	assert_int_equal(mvod_read_file(path, 1 << 22, "calibration", &text, NULL, err, sizeof(err)),
+	assert_int_equal(mvod_read_file(path, 1 << 22, "calibration", 0, &text, NULL, err, sizeof(err)),
 			 0);
 	cJSON *root = cJSON_Parse(text);
 	free(text);

@@ -256,16 +256,16 @@ static const char *head_of(const char *src, const char *name, int n, void (*edit
 	return write_file(name, text);
 }
 
-/* Expects exit 1, needles on stderr, and no CSV written. */
-static void expect_bad_gt(const char *gt, const char *needle1, const char *needle2)
+/* Expects exit code, needles on stderr, and no CSV written. */
+static void expect_bad_gt(const char *gt, int code, const char *needle1, const char *needle2)
 {
 	const char *csv = harness_tmp_path("bad.csv");
 	unlink(csv);
 	struct run_result r;
 	bench(&r, gt, "--csv", csv, NULL);
-	if (r.status != 1 || !strstr(r.err, needle1) || !strstr(r.err, needle2))
-		fail_msg("expected exit 1, '%s' and '%s'; got %d: %s", needle1, needle2, r.status,
-			 r.err);
+	if (r.status != code || !strstr(r.err, needle1) || !strstr(r.err, needle2))
+		fail_msg("expected exit %d, '%s' and '%s'; got %d: %s", code, needle1, needle2,
+			 r.status, r.err);
 	assert_int_not_equal(access(csv, F_OK), 0);
 }
 
@@ -282,7 +282,7 @@ static void test_bad_ground_truth(void **state)
 	(void)state;
 	/* Shorter than the sequence, matched by index: says how many poses and which frame. */
 	const char *shortgt = head_of(gt_kitti, "short.kitti", 10, NULL);
-	expect_bad_gt(shortgt, "short.kitti has 10 poses", "frame 10 has none");
+	expect_bad_gt(shortgt, 1, "short.kitti has 10 poses", "frame 10 has none");
 	/* An unparseable row: the file and the line. */
 	const char *good = head_of(gt_kitti, "good.kitti", 2, NULL);
 	char text[4096];
@@ -291,10 +291,10 @@ static void test_bad_ground_truth(void **state)
 	size_t len = fread(text, 1, sizeof(text) - 200, f);
 	fclose(f);
 	snprintf(text + len, sizeof(text) - len, "1 0 0 x 0 1 0 0 0 0 1 0\n");
-	expect_bad_gt(write_file("garbled.kitti", text), "garbled.kitti:3", "found text");
+	expect_bad_gt(write_file("garbled.kitti", text), 2, "garbled.kitti:3", "found text");
 	/* Timestamps on another clock: the first frame has no pose near it, and the span says why. */
 	const char *later = head_of(gt_tum, "later.tum", FRAMES, shift_time);
-	expect_bad_gt(later, "later.tum", "no pose within 5 ms");
+	expect_bad_gt(later, 1, "later.tum", "no pose within 5 ms");
 }
 
 static void test_bad_usage(void **state)

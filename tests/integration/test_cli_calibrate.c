@@ -209,15 +209,15 @@ static void test_unwritable_out(void **state)
 	(void)state;
 	expect((char *[]){"calibrate", "--source", street, "--board", CHARUCO, "--out",
 			  "/nonexistent-dir/calib.json", NULL},
-	       1, "cannot write in /nonexistent-dir/");
+	       2, "cannot write in /nonexistent-dir/");
 	/* Checked before reading the source: a missing source is not what it reports. */
 	expect((char *[]){"calibrate", "--source", "images:/nonexistent-src", "--board", CHARUCO,
 			  "--out", (char *)harness_tmpdir(), NULL},
-	       1, "is a directory");
+	       2, "is a directory");
 	expect((char *[]){"calibrate", "--source", street, "--board", CHARUCO, "--out", "x.json",
 			  "--report", "/nonexistent-dir/r.png", NULL},
-	       1, "--report /nonexistent-dir/r.png: cannot write");
-	expect((char *[]){"board", "--board", CHARUCO, "--out", "/nonexistent-dir/b.png", NULL}, 1,
+	       2, "--report /nonexistent-dir/r.png: cannot write");
+	expect((char *[]){"board", "--board", CHARUCO, "--out", "/nonexistent-dir/b.png", NULL}, 2,
 	       "cannot write in /nonexistent-dir/");
 }
 

@@ -300,7 +300,7 @@ static void test_bad_url_fails(void **state)
 		assert_int_equal(r.status, 1);
 		/* A missing log is named as such before LCM is asked (test_view_log.c). */
 		assert_non_null(strstr(r.err, i == 0 ? "cannot open LCM at bogus://x"
-						     : "cannot read log /nonexistent/run.lcmlog"));
+						     : "cannot read /nonexistent/run.lcmlog"));
 		assert_int_equal(access(png, F_OK), -1);
 	}
 }

@@ -221,8 +221,8 @@ static void run_notified(char *const argv[], const char *watchdog_pid, char *out
 
 /*
  * The start path of the service with the example config's calibration missing (issue 18):
- * exit status 3, which mvod.service lists in RestartPreventExitStatus= (no restart loop), and
- * a STATUS= line that says why, for `systemctl status`. Never READY=1.
+ * exit status 2, a configuration error, which mvod.service lists in RestartPreventExitStatus=
+ * (no restart loop), and a STATUS= line that says why, for `systemctl status`. Never READY=1.
  */
 static void test_missing_calibration_stops_service(void **state)
 {
@@ -235,17 +235,17 @@ static void test_missing_calibration_stops_service(void **state)
 		 "[lcm]\nenabled = false\n", video, dir);
 	harness_write_file(conf, text);
 	char *argv[] = {(char *)harness_bin("MVOD"), "run", "--config", conf, NULL};
-	assert_int_equal(run_notified_status(argv, NULL, got, sizeof(got)), 3);
+	assert_int_equal(run_notified_status(argv, NULL, got, sizeof(got)), 2);
 	if (!strstr(got, "STATUS=stopped: the calibration ") || !strstr(got, "/none.json"))
 		fail_msg("no STATUS= naming the calibration: %s", got);
 	assert_null(strstr(got, "READY=1"));
-	/* The unit does not restart on 3 (nor on 2, a usage error). */
+	/* The unit does not restart on 2. */
 	const char *src = getenv("MVOD_SRCDIR");
 	assert_non_null(src);
 	char path[512];
 	snprintf(path, sizeof(path), "%s/systemd/mvod.service.in", src);
 	harness_read_file(path, unit, sizeof(unit));
-	assert_non_null(strstr(unit, "\nRestartPreventExitStatus=2 3\n"));
+	assert_non_null(strstr(unit, "\nRestartPreventExitStatus=2\n"));
 }
 
 static void test_sd_notify(void **state)

@@ -264,14 +264,14 @@ static void refused(int status, const char *want, const char *a1, const char *a2
 static void test_refusals(void **state)
 {
 	(void)state;
-	refused(1, "--camera-to-body 0,0,0,0,0,0,1 places a body frame, but --frame is camera: "
+	refused(2, "--camera-to-body 0,0,0,0,0,0,1 places a body frame, but --frame is camera: "
 		   "pass --frame ros", "--camera-to-body", "0,0,0,0,0,0,1", NULL, NULL);
 	/* A bad extrinsic is a usage error, found when the options are read. */
 	refused(2, "--camera-to-body 1,2,3: expected 7 numbers x,y,z,qx,qy,qz,qw", "--frame",
 		"ros", "--camera-to-body", "1,2,3");
 	refused(2, "--camera-to-body 0,0,0,0,0,0,2: expected 7 numbers", "--frame", "ros",
 		"--camera-to-body", "0,0,0,0,0,0,2");
-	refused(1, "--clock realtime: file:", "--clock", "realtime", NULL, NULL);
+	refused(2, "--clock realtime: file:", "--clock", "realtime", NULL, NULL);
 	refused(2, "--frame", "--frame", "enu", NULL, NULL);
 }
 

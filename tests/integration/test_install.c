@@ -81,7 +81,7 @@ static void test_install_and_verify(void **state)
 	snprintf(path, sizeof(path), "%s/unit.txt", harness_tmpdir());
 	harness_read_file(path, unit, sizeof(unit));
 	assert_non_null(strstr(unit, "mvod run --config /etc/mvod/%i.conf\n"));
-	assert_non_null(strstr(unit, "\nRestartPreventExitStatus=2 3\n"));
+	assert_non_null(strstr(unit, "\nRestartPreventExitStatus=2\n"));
 	/*
 	 * With a JDK and LCM's lcm.jar (liblcm-java) the types' jar for lcm-spy is built and
 	 * installed, holding both classes.

@@ -422,10 +422,10 @@ static void test_bad_heights(void **state)
 		refused(&r, 2, "camera-height");
 	}
 	run_mvod(&r, "bad", "--scale", "height", NULL, NULL, NULL, NULL);
-	refused(&r, 1, "--scale height needs the camera's height");
+	refused(&r, 2, "--scale height needs the camera's height");
 	/* 0 is the key's "none". */
 	run_mvod(&r, "bad", "--scale", "height", "--camera-height", "0", NULL, NULL);
-	refused(&r, 1, "--scale height needs the camera's height");
+	refused(&r, 2, "--scale height needs the camera's height");
 }
 
 static void test_bad_speed_sources(void **state)
@@ -435,10 +435,10 @@ static void test_bad_speed_sources(void **state)
 	char url[320];
 	run_mvod(&r, "bad", "--scale", "external", "--speed-url", "file:///nonexistent/x.lcmlog",
 		 NULL, NULL);
-	refused(&r, 1, "cannot read log /nonexistent/x.lcmlog");
+	refused(&r, 2, "cannot read /nonexistent/x.lcmlog: No such file");
 	snprintf(url, sizeof(url), "file://%s/out.lcmlog?mode=w", dir);
 	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
-	refused(&r, 1, "a log to write");
+	refused(&r, 2, "a log to write");
 	run_mvod(&r, "bad", "--scale", "external", "--speed-channel", "", NULL, NULL);
 	refused(&r, 2, "speed-channel");
 	/* Checked before LCM reads it: no whole event, or an absurd length LCM would trust. */
@@ -447,7 +447,7 @@ static void test_bad_speed_sources(void **state)
 	harness_write_file(path, "");
 	snprintf(url, sizeof(url), "file://%s?mode=r", path);
 	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
-	refused(&r, 1, "empty.lcmlog holds no whole event (0 bytes)");
+	refused(&r, 2, "empty.lcmlog holds no whole event (0 bytes)");
 	/* sync, event 0, time 0, channel length 10, data length 2^31 - 16: then the channel. */
 	static const char garbage[] = "\xed\xa1\xda\x01" "\0\0\0\0\0\0\0\0" "\0\0\0\0\0\0\0\0"
 				      "\0\0\0\x0a" "\x7f\xff\xff\xf0" "MVOD_SPEED" "junk";
@@ -458,7 +458,7 @@ static void test_bad_speed_sources(void **state)
 	fclose(f);
 	snprintf(url, sizeof(url), "file://%s?mode=r", path);
 	run_mvod(&r, "bad", "--scale", "external", "--speed-url", url, NULL, NULL);
-	refused(&r, 1, "garbage.lcmlog is corrupt at byte 0 of 42: event of");
+	refused(&r, 2, "garbage.lcmlog is corrupt at byte 0 of 42: event of");
 }
 
 /*

@@ -173,7 +173,7 @@ static void refuse_input(const struct input_case *c)
 	argv[n] = NULL;
 	backup(c->path);
 	assert_int_equal(harness_run(argv, &r), 0);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(c->path);
 }
 
@@ -195,10 +195,10 @@ static void test_output_is_input(void **state)
 	/* Other commands: calib-convert OUT, bench --csv. */
 	struct run_result r;
 	mvod(&r, "calib-convert", calib, calib, NULL);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(calib);
 	mvod(&r, "bench", "--source", images, "--calib", calib, "--gt", gt, "--csv", gt, NULL);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(gt);
 	/* mvod view --png over the log it reads. */
 	char log_url[640];
@@ -208,8 +208,116 @@ static void test_output_is_input(void **state)
 	assert_int_equal(r.status, 0);
 	backup(lcmlog);
 	mvod(&r, "view", "--lcm-url", log_url, "--png", lcmlog, NULL);
-	expect_fail(&r, 1, "is a file this run reads");
+	expect_fail(&r, 2, "is a file this run reads");
 	assert_unchanged(lcmlog);
+}
+
+/* views renders of BOARD, 320x240 PNGs, in the test's folder name; its path into dir. */
+static void synth_board(const char *name, const char *views, char *dir, size_t len)
+{
+	snprintf(dir, len, "%s/%s", harness_tmpdir(), name);
+	char *synth[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", dir, "--board", BOARD, "--views",
+			 (char *)views, "--format", "png", "--size", "320x240", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(synth, &r), 0);
+	assert_int_equal(r.status, 0);
+}
+
+/* --- one file by two names --- */
+
+/*
+ * The names an input and an output may share a file by, made next to input: a symlink to it,
+ * a hard link to it, and a path through ".." (into the folder .., back out by name).
+ */
+struct aliases {
+	char link[600], hard[600], dotdot[700];
+};
+
+static void make_aliases(const char *input, const char *tag, struct aliases *a)
+{
+	const char *slash = strrchr(input, '/');
+	snprintf(a->link, sizeof(a->link), "%s/%s.link", harness_tmpdir(), tag);
+	snprintf(a->hard, sizeof(a->hard), "%s/%s.hard", harness_tmpdir(), tag);
+	/* DIR/name as DIR/../BASE/name, BASE the last component of DIR. */
+	const char *base = slash - 1;
+	while (base > input && *base != '/')
+		base--;
+	snprintf(a->dotdot, sizeof(a->dotdot), "%.*s/..%.*s", (int)(slash - input), input,
+		 (int)strlen(base), base);
+	unlink(a->link);
+	unlink(a->hard);
+	assert_int_equal(symlink(input, a->link), 0);
+	assert_int_equal(link(input, a->hard), 0);
+}
+
+/*
+ * mvod ARGS... where "IN" stands for the input's name and "OUT" for the output's: refused
+ * with 2 before any work, the input byte for byte as it was.
+ */
+static void refuse_alias(const char *input, const char *in, const char *out, const char *const *args)
+{
+	char *argv[24] = {(char *)harness_bin("MVOD")};
+	int n = 1;
+	for (; *args && n < 23; args++)
+		argv[n++] = (char *)(strcmp(*args, "IN") == 0 ? in : strcmp(*args, "OUT") == 0 ? out
+											 : *args);
+	argv[n] = NULL;
+	struct run_result r;
+	backup(input);
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (r.status != 2 || !strstr(r.err, "is a file this run reads"))
+		fail_msg("%s as %s, %s as %s: expected exit 2 and a refusal, got %d: %s%s", input,
+			 in, input, out, r.status, r.out, r.err);
+	assert_unchanged(input);
+}
+
+/* Each way of naming one file twice, for the command args: input by an alias, output by its
+ * real path; the reverse; a hard link; a ".." path. */
+static void refuse_aliases(const char *input, const char *tag, const char *const *args)
+{
+	struct aliases a;
+	make_aliases(input, tag, &a);
+	refuse_alias(input, a.link, input, args);
+	refuse_alias(input, input, a.link, args);
+	refuse_alias(input, input, a.hard, args);
+	refuse_alias(input, a.hard, input, args);
+	refuse_alias(input, input, a.dotdot, args);
+	refuse_alias(input, a.dotdot, input, args);
+}
+
+/*
+ * An output that is an input, however each is named, for every command that writes: the
+ * tests before named the input by its real path only.
+ */
+static void test_aliases(void **state)
+{
+	(void)state;
+	refuse_aliases(calib, "calib", (const char *const[]){"--source", images, "--calib", "IN",
+		       "--no-lcm", "--trajectory", "OUT", NULL});
+	refuse_aliases(gt, "gt", (const char *const[]){"--source", images, "--calib", calib, "--gt",
+		       "IN", "--no-lcm", "--plot", "OUT", NULL});
+	refuse_aliases(gt, "bench", (const char *const[]){"bench", "--source", images, "--calib",
+		       calib, "--gt", "IN", "--csv", "OUT", NULL});
+	refuse_aliases(calib, "convert", (const char *const[]){"calib-convert", "--to", "mvod", "IN",
+		       "OUT", NULL});
+	/* calibrate: --out naming one of the frames it reads (the source by a folder's name). */
+	char dir[512], src[600], first[600];
+	synth_board("alias-board", "12", dir, sizeof(dir));
+	snprintf(src, sizeof(src), "images:%s/images", dir);
+	snprintf(first, sizeof(first), "%s/images/000003.png", dir);
+	struct aliases a;
+	make_aliases(first, "frame", &a); /* outside the folder: read as no frame */
+	const char *const outs[] = {first, a.link, a.hard, a.dotdot};
+	for (size_t i = 0; i < sizeof(outs) / sizeof(outs[0]); i++)
+		refuse_alias(first, NULL, outs[i], (const char *const[]){"calibrate", "--source", src,
+			     "--board", BOARD, "--out", "OUT", NULL});
+	/* The source's folder by a link, the frame named by its real path. */
+	char linkdir[600], linksrc[700];
+	snprintf(linkdir, sizeof(linkdir), "%s/board-link", harness_tmpdir());
+	assert_int_equal(symlink(dir, linkdir), 0);
+	snprintf(linksrc, sizeof(linksrc), "images:%s/images", linkdir);
+	refuse_alias(first, NULL, first, (const char *const[]){"calibrate", "--source", linksrc,
+		     "--board", BOARD, "--out", "OUT", NULL});
 }
 
 /* --- a failed start --- */
@@ -231,7 +339,7 @@ static void test_failed_start_keeps_outputs(void **state)
 	expect_fail(&r, 1, "nonexistent-typo");
 	mvod(&r, "--source", images, "--calib", "/nonexistent-calib.json", "--trajectory", traj,
 	     "--lcm-url", url, NULL);
-	expect_fail(&r, 3, "nonexistent-calib.json"); /* 3: the calibration */
+	expect_fail(&r, 2, "nonexistent-calib.json"); /* 2: the calibration */
 	mvod(&r, "--source", images, "--calib", calib, "--gt", bad_gt, "--scale", "gt",
 	     "--trajectory", traj, "--lcm-url", url, NULL);
 	expect_fail(&r, 1, "frame 0");
@@ -259,9 +367,9 @@ static void test_two_instances(void **state)
 	/* Stopped mid-run, holding its locks, while the others try; then it goes on. */
 	assert_int_equal(kill(first, SIGSTOP), 0);
 	mvod(&r, "--source", images, "--calib", calib, "--trajectory", traj, "--lcm-url", url2, NULL);
-	expect_fail(&r, 1, "is locked by another process");
+	expect_fail(&r, 2, "is locked by another process");
 	mvod(&r, "--source", images, "--calib", calib, "--trajectory", traj2, "--lcm-url", url, NULL);
-	expect_fail(&r, 1, "LCM log");
+	expect_fail(&r, 2, "LCM log");
 	assert_true(strstr(r.err, "is locked by another process") != NULL);
 	assert_int_equal(kill(first, SIGCONT), 0);
 	assert_int_equal(harness_wait(first, &status), 1);
@@ -343,31 +451,13 @@ static void test_fifo_without_peer(void **state)
 	unlink(fifo);
 	assert_int_equal(mkfifo(fifo, 0600), 0);
 	mvod(&r, "--source", images, "--calib", calib, "--no-lcm", "--trajectory", fifo, NULL);
-	expect_fail(&r, 1, "is a FIFO that no process reads");
+	expect_fail(&r, 2, "is a FIFO that no process reads");
 	mvod(&r, "--source", images, "--config", fifo, "--no-lcm", NULL);
 	expect_fail(&r, 2, "is a FIFO that no process writes into");
 	assert_int_equal(file_type(fifo), S_IFIFO);
 }
 
 /* --- SIGHUP at start-up --- */
-
-/* Whether pid has path open (same device and inode). */
-static bool holds_open(pid_t pid, const char *path)
-{
-	struct stat want, st;
-	char dir[64], fd_path[600];
-	assert_int_equal(stat(path, &want), 0);
-	snprintf(dir, sizeof(dir), "/proc/%d/fd", (int)pid);
-	DIR *d = opendir(dir);
-	bool found = false;
-	for (struct dirent *e = d ? readdir(d) : NULL; e && !found; e = readdir(d)) {
-		snprintf(fd_path, sizeof(fd_path), "%s/%s", dir, e->d_name);
-		found = stat(fd_path, &st) == 0 && st.st_dev == want.st_dev && st.st_ino == want.st_ino;
-	}
-	if (d)
-		closedir(d);
-	return found;
-}
 
 /*
  * mvod reads its configuration from a FIFO this test holds: it is blocked in start-up, before
@@ -386,18 +476,7 @@ static void test_sighup_at_start(void **state)
 	char *argv[] = {(char *)harness_bin("MVOD"), "-q", "--config", fifo, "--source", images,
 			"--calib", calib, "--no-lcm", "--max-frames", "2", NULL};
 	pid_t pid = harness_spawn(argv, NULL, NULL);
-	int st;
-	char exe[64], self[PATH_MAX], want[PATH_MAX];
-	snprintf(exe, sizeof(exe), "/proc/%d/exe", (int)pid);
-	assert_non_null(realpath(harness_bin("MVOD"), want));
-	/* mvod itself, not the forked test before exec (which still holds the test's end). */
-	for (ssize_t n = 0; n <= 0 || strcmp(self, want) != 0 || !holds_open(pid, fifo);) {
-		n = readlink(exe, self, sizeof(self) - 1);
-		self[n > 0 ? n : 0] = '\0';
-		if (waitpid(pid, &st, WNOHANG) == pid)
-			fail_msg("mvod ended (%d) before it opened its configuration", st);
-		usleep(1000);
-	}
+	harness_wait_open(pid, fifo);
 	assert_int_equal(kill(pid, SIGHUP), 0);
 	const char text[] = "[vo]\nfeatures = 1000\n";
 	assert_int_equal(write(hold, text, sizeof(text) - 1), (ssize_t)sizeof(text) - 1);
@@ -563,12 +642,7 @@ static void test_calibrate_interrupted(void **state)
 	(void)state;
 	char dir[512], src[600], out[512], report[512], err_path[512], text[4096];
 	struct stat st;
-	snprintf(dir, sizeof(dir), "%s/board", harness_tmpdir());
-	char *synth[] = {(char *)harness_bin("MVOD_SYNTH"), "--out", dir, "--board", BOARD, "--views",
-			 "40", "--format", "png", "--size", "320x240", NULL};
-	struct run_result r;
-	assert_int_equal(harness_run(synth, &r), 0);
-	assert_int_equal(r.status, 0);
+	synth_board("board", "40", dir, sizeof(dir));
 	snprintf(src, sizeof(src), "images:%s/images", dir);
 	snprintf(out, sizeof(out), "%s/good.json", harness_tmpdir());
 	snprintf(report, sizeof(report), "%s/good.png", harness_tmpdir());
@@ -606,6 +680,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_output_is_input),
+		cmocka_unit_test(test_aliases),
 		cmocka_unit_test(test_failed_start_keeps_outputs),
 		cmocka_unit_test(test_two_instances),
 		cmocka_unit_test(test_symlink_stays_a_link),

@@ -67,15 +67,15 @@ static const char *camera(const char *name, double fx, double cx, const char *di
 static void test_focal_length(void **state)
 {
 	(void)state;
-	expect(camera("huge.json", 1e300, 159.5, ""), 3,
+	expect(camera("huge.json", 1e300, 159.5, ""), 2,
 	       "fx = 1e+300 px is outside [16, 6400] px (0.05 to 20 times the image width", NULL);
-	expect(camera("tiny.json", 10, 159.5, ""), 3, "fx = 10 px is outside [16, 6400] px", NULL);
+	expect(camera("tiny.json", 10, 159.5, ""), 2, "fx = 10 px is outside [16, 6400] px", NULL);
 }
 
 static void test_principal_point(void **state)
 {
 	(void)state;
-	expect(camera("cx.json", 288, 5000, ""), 3,
+	expect(camera("cx.json", 288, 5000, ""), 2,
 	       "cx = 5000 px is outside [-160, 480] px (the image and half its size around it)",
 	       NULL);
 }
@@ -84,9 +84,9 @@ static void test_principal_point(void **state)
 static void test_distortion(void **state)
 {
 	(void)state;
-	expect(camera("fold.json", 288, 159.5, "-1e6, 0, 0, 0, 0"), 3,
+	expect(camera("fold.json", 288, 159.5, "-1e6, 0, 0, 0, 0"), 2,
 	       "the distortion folds the image: toward the top-left corner", NULL);
-	expect(camera("stretch.json", 288, 159.5, "1e6, 0, 0, 0, 0"), 3,
+	expect(camera("stretch.json", 288, 159.5, "1e6, 0, 0, 0, 0"), 2,
 	       "times as far out as a pinhole would (at most 4 for a real lens)", NULL);
 	/* A real lens's barrel distortion (a webcam's k1 -0.3, k2 0.1) passes. */
 	expect(camera("real.json", 288, 159.5, "-0.3, 0.1, 0, 0, 0"), 0, "mvod: 4 frames", NULL);
@@ -108,7 +108,7 @@ static void test_channel_too_long(void **state)
 static void test_image_too_small(void **state)
 {
 	(void)state;
-	expect(calib, 1, "frames of 320x240 are 16x12 after --resize 0.05, smaller than the 32x32 "
+	expect(calib, 2, "frames of 320x240 are 16x12 after --resize 0.05, smaller than the 32x32 "
 			 "pixels the feature detector needs: raise --resize", "--resize", "0.05", NULL);
 }
 
@@ -160,7 +160,7 @@ static void test_empty_calibration(void **state)
 	char path[300];
 	snprintf(path, sizeof(path), "%s/empty.json", harness_tmpdir());
 	harness_write_file(path, "\n");
-	expect(path, 3, "empty.json: the file is empty", NULL);
+	expect(path, 2, "empty.json: the file is empty", NULL);
 }
 
 /* A 6000x4000 grey PGM of a ramp at path (24 MB; PGM: no encoder needed). */

@@ -122,7 +122,7 @@ static void views_name_their_frames(const char *dir, const char *spec, const cha
 	struct mvod_board b;
 	char err[256], *text;
 	assert_int_equal(mvod_board_parse(spec, &b, err, sizeof(err)), 0);
-	assert_int_equal(mvod_read_file(out, 1 << 22, "calibration", &text, NULL, err, sizeof(err)), 0);
+	assert_int_equal(mvod_read_file(out, 1 << 22, "calibration", 0, &text, NULL, err, sizeof(err)), 0);
 	cJSON *root = cJSON_Parse(text);
 	free(text);
 	const cJSON *views = cJSON_GetObjectItemCaseSensitive(root, "views"), *v;

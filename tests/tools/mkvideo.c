@@ -5,6 +5,8 @@
  *
  *   mkvideo OUT CODEC[:PIXFMT] WxH@MS...   e.g. mkvideo vfr.mkv ffv1 64x48@0 64x48@33 64x48@400
  *
+ * A bare WxH sets the size without a frame: mkvideo empty.mkv ffv1 64x48 is a video of none.
+ *
  * Every frame is a key frame (a size change may come at any frame), YUV 4:2:0 unless PIXFMT
  * says gray or bgr0, a pattern that moves with the frame number: mkvideo_level(x, y, i) in the
  * luma (grey) plane, or in R with G and B derived from it (bgr0: mkvideo_bgr). The container
@@ -14,6 +16,7 @@
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
 #include <libavutil/pixdesc.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -138,9 +141,10 @@ int main(int argc, char **argv)
 	o.st = avformat_new_stream(o.fmt, NULL);
 	int w0 = 0, h0 = 0;
 	for (int i = 3; i < argc; i++) {
-		int w, h;
+		int w, h, n = 0;
 		long ms;
-		if (sscanf(argv[i], "%dx%d@%ld", &w, &h, &ms) != 3) {
+		bool frame = sscanf(argv[i], "%dx%d@%ld", &w, &h, &ms) == 3;
+		if (!frame && (sscanf(argv[i], "%dx%d%n", &w, &h, &n) != 2 || argv[i][n])) {
 			fprintf(stderr, "mkvideo: %s is not WxH@MS\n", argv[i]);
 			return 2;
 		}
@@ -155,7 +159,8 @@ int main(int argc, char **argv)
 			w0 = w;
 			h0 = h;
 		}
-		put_frame(&o, w, h, ms, i - 3);
+		if (frame)
+			put_frame(&o, w, h, ms, i - 3);
 	}
 	close_encoder(&o);
 	check(av_write_trailer(o.fmt), "writing the trailer");

@@ -3,6 +3,7 @@
  * the range (issue 10).
  */
 #include <errno.h>
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -80,12 +81,30 @@ static void test_fold(void **state)
 	expect(&c, "times as far out as a pinhole would");
 }
 
+/* A coefficient that is no number is named so, not taken for a folding lens. */
+static void test_not_a_number(void **state)
+{
+	(void)state;
+	struct mvod_camera c = chessboard;
+	c.dist[1] = NAN;
+	expect(&c, "distortion coefficient k2 = nan is not a number");
+	c = chessboard;
+	c.model = MVOD_CAM_FISHEYE_KB4;
+	c.n_dist = 4;
+	memcpy(c.dist, (double[]){0.1, 0, INFINITY, 0}, 4 * sizeof(double));
+	expect(&c, "distortion coefficient k3 = inf is not a number");
+	c = chessboard;
+	c.cx = NAN;
+	expect(&c, "cx = nan is not a number");
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_real_lenses_pass),
 		cmocka_unit_test(test_focal_and_centre),
 		cmocka_unit_test(test_fold),
+		cmocka_unit_test(test_not_a_number),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

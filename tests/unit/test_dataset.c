@@ -12,6 +12,8 @@
 
 #include <cmocka.h>
 
+#include "harness.h"
+
 #include "capture/dataset.h"
 
 static void test_parse_ns(void **state)
@@ -60,21 +62,63 @@ static void test_parse_pose(void **state)
 {
 	(void)state;
 	struct mvod_pose p;
+	char why[256] = "";
 	/* EuRoC: w first, comma-separated, velocities and biases may follow. */
-	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0,1,9,9,9", ',', true, &p), 0);
+	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0,1,9,9,9", ',', true, &p, why, sizeof(why)), 0);
 	assert_true(p.t[0] == 1 && p.t[1] == 2 && p.t[2] == 3);
 	/* q = (w 0, z 1): a half turn about z. */
 	assert_true(fabs(p.R[0] + 1) < 1e-15 && fabs(p.R[4] + 1) < 1e-15 && p.R[8] == 1);
 	/* TUM: w last, whitespace, nothing after. */
-	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1", ' ', false, &p), 0);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1", ' ', false, &p, why, sizeof(why)), 0);
 	assert_true(p.R[0] == 1 && p.R[4] == 1 && p.R[8] == 1);
-	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1 5", ' ', false, &p), -EINVAL);
-	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0", ' ', false, &p), -EINVAL);
-	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0", ',', true, &p), -EINVAL);
-	assert_int_equal(mvod_ds_parse_pose(",1,2,nan,0,0,0,1", ',', true, &p), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1 5", ' ', false, &p, why, sizeof(why)), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0", ' ', false, &p, why, sizeof(why)), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0", ',', true, &p, why, sizeof(why)), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(",1,2,nan,0,0,0,1", ',', true, &p, why, sizeof(why)), -EINVAL);
 	/* The separator must be there: "1.4,0" is no TUM line, "1 2" no EuRoC one. */
-	assert_int_equal(mvod_ds_parse_pose(",1 2 3 0 0 0 1", ' ', false, &p), -EINVAL);
-	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1", ',', true, &p), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(",1 2 3 0 0 0 1", ' ', false, &p, why, sizeof(why)), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1", ',', true, &p, why, sizeof(why)), -EINVAL);
+	assert_string_equal(why, ""); /* no pose line: the caller names the layout */
+	/*
+	 * Numbers that are no pose, each with the reason: a zero quaternion (39 of 40 trajectory
+	 * lines were nan), one off unit length by more than 1 %, a position past any on Earth.
+	 */
+	assert_int_equal(mvod_ds_parse_pose(",1,2,3,0,0,0,0", ',', true, &p, why, sizeof(why)),
+			 -EINVAL);
+	assert_string_equal(why, "quaternion (qx qy qz qw) = (0 0 0 0) has length 0, not 1 (within "
+				 "0.01): no rotation");
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1.0101", ' ', false, &p, why,
+					    sizeof(why)), -EINVAL);
+	assert_int_equal(mvod_ds_parse_pose(" 1 2 3 0 0 0 1.0099", ' ', false, &p, why,
+					    sizeof(why)), 0);
+	assert_true(fabs(p.R[0] - 1) < 1e-15); /* normalised */
+	assert_int_equal(mvod_ds_parse_pose(",1e308,2,3,1,0,0,0", ',', true, &p, why, sizeof(why)),
+			 -EINVAL);
+	assert_non_null(strstr(why, "position (1e+308 2 3) m is that far: no pose on Earth is more "
+				    "than 1e+08 m from the origin"));
+}
+
+/*
+ * Frames of an index must be a microsecond apart at least, mvod's frame clock: 1000 and 1400
+ * ns were two frames at one time (fuzz/euroc_index).
+ */
+static void test_frames_a_microsecond_apart(void **state)
+{
+	(void)state;
+	struct mvod_ds_frames f = {0};
+	char err[512] = "";
+	const char *dir = harness_tmpdir();
+	harness_write_file(harness_tmp_path("1.png"), "");
+	harness_write_file(harness_tmp_path("2.png"), "");
+	assert_int_equal(mvod_ds_frames_add(&f, "data.csv", 1, dir, "1.png", 1000, err, sizeof(err)),
+			 0);
+	assert_int_equal(mvod_ds_frames_add(&f, "data.csv", 2, dir, "2.png", 1400, err, sizeof(err)),
+			 -EINVAL);
+	assert_non_null(strstr(err, "data.csv line 2: time 0.000001400 s is not after "
+				    "0.000001000 s of line 1: the frames (to the microsecond)"));
+	assert_int_equal(mvod_ds_frames_add(&f, "data.csv", 2, dir, "2.png", 1500, err, sizeof(err)),
+			 0);
+	mvod_ds_frames_free(&f);
 }
 
 int main(void)
@@ -83,6 +127,7 @@ int main(void)
 		cmocka_unit_test(test_parse_ns),
 		cmocka_unit_test(test_parse_seconds),
 		cmocka_unit_test(test_parse_pose),
+		cmocka_unit_test(test_frames_a_microsecond_apart),
 	};
-	return cmocka_run_group_tests(tests, NULL, NULL);
+	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }

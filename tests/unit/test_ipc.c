@@ -388,6 +388,26 @@ static void test_file_log(void **state)
 	tmplog_fini(&t);
 }
 
+/* An LCM log in t of the n samples on MVOD_SPEED, opened as --speed-url file://. */
+static struct mvod_speed *speed_from(struct tmplog *t, const mvod_speed_t *samples, int n)
+{
+	tmplog_init(t);
+	struct mvod_lcm_log *log;
+	assert_int_equal(mvod_lcm_log_open("speed log", t->path, 256, &log, NULL, 0), 0);
+	for (int i = 0; i < n; i++) {
+		uint8_t buf[64];
+		int len = mvod_speed_t_encode(buf, 0, sizeof(buf), &samples[i]);
+		assert_true(len > 0);
+		assert_int_equal(mvod_lcm_log_write(log, "MVOD_SPEED", buf, (size_t)len), 0);
+	}
+	assert_int_equal(mvod_lcm_log_close(log), 0);
+	char url[160];
+	snprintf(url, sizeof(url), "file://%s?mode=r", t->path);
+	struct mvod_speed *s;
+	assert_int_equal(mvod_speed_create(url, NULL, &s, NULL, 0), 0);
+	return s;
+}
+
 /*
  * --speed-url file://: the odometer between two samples is interpolated, beyond the last one
  * extrapolated at its speed for up to MVOD_SPEED_STALE_US, and in a gap longer than that on
@@ -397,23 +417,10 @@ static void test_speed_log(void **state)
 {
 	(void)state;
 	struct tmplog t;
-	tmplog_init(&t);
-	struct mvod_lcm_log *log;
-	assert_int_equal(mvod_lcm_log_open("speed log", t.path, 256, &log, NULL, 0), 0);
 	/* 1 m/s: 1 m at 1 s, then nothing for 2 s, then 3.5 m at 3 s. */
 	static const mvod_speed_t samples[] = {{0, 1.0, 1, 0.0}, {1000000, 1.0, 1, 1.0},
 					       {3000000, 1.0, 1, 3.5}};
-	for (int i = 0; i < 3; i++) {
-		uint8_t buf[64];
-		int len = mvod_speed_t_encode(buf, 0, sizeof(buf), &samples[i]);
-		assert_true(len > 0);
-		assert_int_equal(mvod_lcm_log_write(log, "MVOD_SPEED", buf, (size_t)len), 0);
-	}
-	assert_int_equal(mvod_lcm_log_close(log), 0);
-	char url[160];
-	snprintf(url, sizeof(url), "file://%s?mode=r", t.path);
-	struct mvod_speed *s;
-	assert_int_equal(mvod_speed_create(url, NULL, &s, NULL, 0), 0);
+	struct mvod_speed *s = speed_from(&t, samples, 3);
 	double m = -1;
 	assert_int_equal(mvod_speed_odometer(s, 250000, &m), 0);
 	assert_true(m == 0.25);
@@ -426,6 +433,30 @@ static void test_speed_log(void **state)
 	assert_int_equal(mvod_speed_odometer(s, 3250000, &m), 0);
 	assert_true(m == 3.75);
 	assert_int_equal(mvod_speed_odometer(s, 3750000, &m), -EAGAIN);
+	mvod_speed_destroy(s);
+	tmplog_fini(&t);
+}
+
+/*
+ * Times at int64's ends are refused as times (they were differenced and overflowed: UBSan);
+ * so is a negative one; a frame's time there finds no sample.
+ */
+static void test_speed_extreme_times(void **state)
+{
+	(void)state;
+	struct tmplog t;
+	static const mvod_speed_t samples[] = {{-INT64_MAX, 1.0, 0, 0.0}, {-1, 1.0, 0, 0.0},
+					       {INT64_MAX, 1.0, 0, 0.0}, {1000000, 1.0, 0, 0.0}};
+	struct mvod_speed *s = speed_from(&t, samples, 4);
+	double m = -1;
+	assert_int_equal(mvod_speed_odometer(s, INT64_MIN, &m), -EAGAIN);
+	assert_int_equal(mvod_speed_odometer(s, INT64_MAX, &m), -EAGAIN);
+	struct mvod_speed_counts c;
+	mvod_speed_counts(s, &c);
+	assert_int_equal(c.bad_time, 3);
+	assert_int_equal(c.accepted, 1);
+	assert_int_equal(mvod_speed_odometer(s, 1250000, &m), 0);
+	assert_true(m == 0.25); /* the one sample at its speed */
 	mvod_speed_destroy(s);
 	tmplog_fini(&t);
 }
@@ -614,6 +645,7 @@ int main(void)
 		cmocka_unit_test(test_send_seam),
 		cmocka_unit_test(test_log_urls),
 		cmocka_unit_test(test_speed_log),
+		cmocka_unit_test(test_speed_extreme_times),
 		cmocka_unit_test(test_upgrade),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1,7 +1,6 @@
 /*
- * mvod_read_file: the whole file or a reason; the size bound counted to the byte.
- * mvod_read_lines: each line that is not blank or a comment, with its number, ends cut off;
- * the callback's stop and error; the file's own errors.
+ * mvod_read_file: the whole file or a reason; the size bound counted to the byte; the input
+ * path's refusals (a directory, a FIFO or a device where a regular file is meant).
  */
 #include <errno.h>
 #include <setjmp.h>
@@ -10,11 +9,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
 #include "harness.h"
 
+#include "util/input.h"
 #include "util/read_file.h"
 
 static char path[256];
@@ -45,7 +49,7 @@ static void test_whole_file(void **state)
 		char *want = text_of(sizes[i]), *got = NULL, err[256] = "";
 		size_t len = 1234;
 		harness_write_file(path, want);
-		if (mvod_read_file(path, 10000, "test file", &got, &len, err, sizeof(err)))
+		if (mvod_read_file(path, 10000, "test file", 0, &got, &len, err, sizeof(err)))
 			fail_msg("%zu bytes: %s", sizes[i], err);
 		assert_int_equal(len, sizes[i]);
 		assert_string_equal(got, want); /* NUL-terminated at len */
@@ -60,74 +64,61 @@ static void test_refusals(void **state)
 	char *t = text_of(10001), *got = NULL, err[256] = "";
 	harness_write_file(path, t);
 	free(t);
-	assert_int_equal(mvod_read_file(path, 10000, "test file", &got, NULL, err, sizeof(err)), -EFBIG);
+	assert_int_equal(mvod_read_file(path, 10000, "test file", 0, &got, NULL, err, sizeof(err)), -EFBIG);
 	assert_non_null(strstr(err, "larger than 10000 bytes: not a test file"));
 	assert_null(got);
-	assert_int_equal(mvod_read_file("/nonexistent/f", 10, "test file", &got, NULL, err, sizeof(err)),
+	assert_int_equal(mvod_read_file("/nonexistent/f", 10, "test file", 0, &got, NULL, err, sizeof(err)),
 			 -ENOENT);
 	assert_non_null(strstr(err, "cannot read /nonexistent/f"));
-	assert_int_equal(mvod_read_file(harness_tmpdir(), 10, "test file", &got, NULL, err, sizeof(err)),
+	assert_int_equal(mvod_read_file(harness_tmpdir(), 10, "test file", 0, &got, NULL, err, sizeof(err)),
 			 -EISDIR);
 	assert_null(got);
 }
 
-/* What the callback saw: "lineno:text|" per line, and when it stops or fails. */
-struct seen {
-	char text[512];
-	size_t stop_at, fail_at;
-};
-
-static int see(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
+/* A FIFO is taken with MVOD_INPUT_STREAM when a process writes into it, never without. */
+static void test_fifo(void **state)
 {
-	struct seen *s = ctx;
-	size_t len = strlen(s->text);
-	snprintf(s->text + len, sizeof(s->text) - len, "%zu:%s|", lineno, line);
-	if (lineno == s->fail_at) {
-		snprintf(err, errlen, "line %zu is bad", lineno);
-		return -EINVAL;
+	(void)state;
+	char fifo[300], *got = NULL, err[256] = "";
+	snprintf(fifo, sizeof(fifo), "%s/fifo", harness_tmpdir());
+	unlink(fifo);
+	assert_int_equal(mkfifo(fifo, 0600), 0);
+	int w = open(fifo, O_RDWR | O_CLOEXEC); /* a writer: the text waits in the pipe */
+	assert_true(w >= 0);
+	assert_int_equal(write(w, "x = 1\n", 6), 6);
+	assert_int_equal(mvod_read_file(fifo, 100, "test file", 0, &got, NULL, err, sizeof(err)),
+			 -EINVAL);
+	assert_non_null(strstr(err, "is a FIFO: the test file must be a regular file"));
+	pid_t pid = fork();
+	if (pid == 0) { /* the writer, which ends after a while: the end of the text */
+		usleep(100000);
+		_exit(0);
 	}
-	return lineno == s->stop_at;
+	close(w);
+	size_t len = 0;
+	int ret = mvod_read_file(fifo, 100, "test file", MVOD_INPUT_STREAM, &got, &len, err,
+				 sizeof(err));
+	waitpid(pid, NULL, 0);
+	if (ret)
+		fail_msg("%s", err);
+	assert_string_equal(got, "x = 1\n");
+	free(got);
+	/* Nobody writes: refused at once, never blocking. */
+	assert_int_equal(mvod_read_file(fifo, 100, "test file", MVOD_INPUT_STREAM, &got, NULL, err,
+					sizeof(err)), -ENXIO);
+	assert_non_null(strstr(err, "is a FIFO that no process writes into"));
 }
 
-static void test_lines(void **state)
+/* /dev/zero is endless: a device is refused before a byte is read. */
+static void test_device(void **state)
 {
 	(void)state;
-	/* CRLF and LF ends, blank and whitespace-only lines, comments (indented too), no final end. */
-	harness_write_file(path, "a b\r\n\n  \t\n# c\n  # d\n  e\n\r\nf");
-	struct seen s = {.stop_at = 0};
-	char err[256] = "";
-	assert_int_equal(mvod_read_lines(path, see, &s, err, sizeof(err)), 0);
-	assert_string_equal(s.text, "1:a b|6:  e|8:f|");
-	/* > 0 stops the reading without an error. */
-	s = (struct seen){.stop_at = 6};
-	assert_int_equal(mvod_read_lines(path, see, &s, err, sizeof(err)), 0);
-	assert_string_equal(s.text, "1:a b|6:  e|");
-	/* An error ends it, handed back as the callback gave it. */
-	s = (struct seen){.fail_at = 6};
-	assert_int_equal(mvod_read_lines(path, see, &s, err, sizeof(err)), -EINVAL);
-	assert_string_equal(s.text, "1:a b|6:  e|");
-	assert_string_equal(err, "line 6 is bad");
-	/* A line longer than any first buffer comes whole. */
-	char *t = text_of(10000);
-	harness_write_file(path, t);
-	s = (struct seen){.stop_at = 0};
-	assert_int_equal(mvod_read_lines(path, see, &s, err, sizeof(err)), 0);
-	assert_int_equal(strlen(s.text), sizeof(s.text) - 1);
-	assert_memory_equal(s.text + 2, t, sizeof(s.text) - 3);
-	free(t);
-}
-
-static void test_lines_refused(void **state)
-{
-	(void)state;
-	struct seen s = {.stop_at = 0};
-	char err[256] = "";
-	assert_int_equal(mvod_read_lines("/nonexistent/f", see, &s, err, sizeof(err)), -ENOENT);
-	assert_non_null(strstr(err, "cannot read /nonexistent/f"));
-	/* A directory opens, then fails to read: an error, not an empty file. */
-	assert_int_equal(mvod_read_lines(harness_tmpdir(), see, &s, err, sizeof(err)), -EISDIR);
-	assert_non_null(strstr(err, "Is a directory"));
-	assert_string_equal(s.text, "");
+	char *got = NULL, err[256] = "";
+	assert_int_equal(mvod_read_file("/dev/zero", 1 << 20, "test file", MVOD_INPUT_STREAM, &got,
+					NULL, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "/dev/zero is a character device: the test file must be a "
+				    "regular file"));
+	assert_null(got);
 }
 
 int main(void)
@@ -135,8 +126,8 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_whole_file),
 		cmocka_unit_test(test_refusals),
-		cmocka_unit_test(test_lines),
-		cmocka_unit_test(test_lines_refused),
+		cmocka_unit_test(test_fifo),
+		cmocka_unit_test(test_device),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

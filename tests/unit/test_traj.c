@@ -102,6 +102,20 @@ static void test_load_errors(void **state)
 	expect_load_error("0.1 0 0 0 0 0 0 1\n0.2 0 0 nan 0 0 0 1\n", "bad.txt:2",
 			  "found nan or inf");
 	expect_load_error("# only a comment\n\n", "bad.txt", "no poses");
+	/*
+	 * Numbers that are no pose: a KITTI rotation all zero (accepted, then nan everywhere), one
+	 * mirrored (det -1), one 2 % off orthonormal; a position of 1e308; a zero quaternion.
+	 */
+	expect_load_error("1 0 0 0 0 1 0 0 0 0 1 0\n0 0 0 1 0 0 0 2 0 0 0 3\n", "bad.txt:2: rotation "
+			  "[0 0 0; 0 0 0; 0 0 0] is no rotation: R^T R is 1 off the identity",
+			  "(KITTI: a row-major 3x4 pose)");
+	expect_load_error("-1 0 0 0 0 1 0 0 0 0 1 0\n", "bad.txt:1: rotation", "det R = -1");
+	expect_load_error("1.01 0 0 0 0 1 0 0 0 0 1 0\n", "bad.txt:1: rotation",
+			  "R^T R is 0.0201 off the identity (within 0.01)");
+	expect_load_error("0.1 0 0 0 0 0 0 1\n0.2 1e308 0 0 0 0 0 1\n", "bad.txt:2: position "
+			  "(1e+308 0 0) m is that far", "(TUM: t tx ty tz qx qy qz qw)");
+	expect_load_error("0.1 0 0 0 0 0 0 0\n", "bad.txt:1: quaternion (qx qy qz qw) = (0 0 0 0) "
+			  "has length 0", "not 1 (within 0.01)");
 	struct mvod_traj tr;
 	char err[256];
 	assert_int_equal(mvod_traj_load("/nonexistent/x", &tr, err, sizeof(err)), -ENOENT);

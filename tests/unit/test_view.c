@@ -7,6 +7,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -317,6 +318,54 @@ static void test_v2_and_v1(void **state)
 	mvod_view_fini(&v);
 }
 
+/*
+ * A log's state byte that is no state shows as UNKNOWN: loaded into the enum as it was, the
+ * drawing (C++) read an out-of-range value (UBSan: "load of value 100"); the PNG is drawn.
+ */
+static void test_unknown_state(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	mvod_status_t st = {.state = 100};
+	mvod_view_add_status(&v, &st);
+	assert_int_equal(v.state, MVOD_RUN_UNKNOWN);
+	assert_int_equal(v.status.state, MVOD_RUN_UNKNOWN);
+	assert_int_equal(v.last_state, MVOD_RUN_UNKNOWN);
+	mvod_pose_t p = pose_at(1, 0);
+	p.state = -7;
+	mvod_view_add_pose(&v, &p, 0);
+	assert_int_equal(v.state, MVOD_RUN_UNKNOWN);
+	assert_string_equal(mvod_run_state_name(v.state), "UNKNOWN");
+	char png[64];
+	snprintf(png, sizeof(png), "/tmp/mvod-test-view-%d.png", (int)getpid());
+	struct mvod_view_labels l = {"unknown", NULL};
+	assert_int_equal(mvod_view_write_png(&v, 0, &l, png), 0);
+	unlink(png);
+	mvod_view_fini(&v);
+}
+
+/* A pose message that is no pose is not drawn (the path and heading went nan), only counted. */
+static void test_refused_pose(void **state)
+{
+	(void)state;
+	struct mvod_view v;
+	assert_int_equal(mvod_view_init(&v, 100), 0);
+	mvod_pose_t p = pose_at(1, 0);
+	mvod_view_add_pose(&v, &p, 0);
+	p.orientation[0] = 0; /* a zero quaternion */
+	p.frame = 7;
+	mvod_view_add_pose(&v, &p, 1);
+	p = pose_at(NAN, 0);
+	mvod_view_add_pose(&v, &p, 2);
+	assert_int_equal(v.poses, 1);
+	assert_int_equal(v.refused, 2);
+	assert_non_null(strstr(v.refused_why, "frame 7: quaternion (qx qy qz qw) = (0 0 0 0)"));
+	assert_true(v.pose.t[2] == 1 && isfinite(mvod_view_yaw_deg(&v)));
+	assert_int_equal(v.path.n, 1);
+	mvod_view_fini(&v);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -331,6 +380,8 @@ int main(void)
 		cmocka_unit_test(test_plot_draw_paints_every_pixel),
 		cmocka_unit_test(test_unit_follows_scale_source),
 		cmocka_unit_test(test_plot_draw_unit),
+		cmocka_unit_test(test_unknown_state),
+		cmocka_unit_test(test_refused_pose),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }
