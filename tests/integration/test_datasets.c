@@ -399,6 +399,34 @@ static void test_euroc_bad_frames(void **state)
 				  "filename\"");
 }
 
+/*
+ * cam0/data.csv as published: CRLF line ends (the EuRoC-rs crate's test_data, copied from
+ * MH_01_easy, has them), and rows ending in an empty field; a third column is refused.
+ */
+static void test_euroc_csv_line_ends(void **state)
+{
+	(void)state;
+	char csv[1024] = "#timestamp [ns],filename\r\n", row[128];
+	for (int i = 0; i < 3; i++) {
+		euroc_row(row, sizeof(row), i);
+		strcpy(row + strlen(row) - 1, i == 1 ? ",\r\n" : "\r\n");
+		strcat(csv, row);
+	}
+	struct mvod_source *src;
+	struct mvod_frame f;
+	char err[512] = "";
+	if (mvod_source_open(bad_euroc(NULL, NULL, csv, NULL), &src, err, sizeof(err)) != 0)
+		fail_msg("%s", err);
+	for (int i = 0; i < 3; i++)
+		assert_int_equal(mvod_source_read(src, &f), 0);
+	assert_int_equal(mvod_source_read(src, &f), -ENODATA);
+	mvod_source_close(src);
+	strcpy(strstr(csv, ",\r\n"), ",x\r\n");
+	harness_source_open_fails(bad_euroc(NULL, NULL, csv, NULL), -EINVAL,
+				  "data.csv line 3: \"1403636579863555584,1403636579863555584.\" is "
+				  "not \"timestamp [ns],filename\""); /* the line's first 40 characters */
+}
+
 static void test_euroc_bad_sensor(void **state)
 {
 	(void)state;
@@ -417,7 +445,7 @@ static void test_euroc_bad_sensor(void **state)
 				  -EINVAL, "sensor.yaml line 15: intrinsics [fu, fv, cu, cv] must be a "
 				  "list of 4 numbers");
 	harness_source_open_fails(bad_euroc("data: [", "data: [2, ", NULL, NULL), -EINVAL,
-				  "sensor.yaml line 9: T_BS data must be a list of 16 numbers");
+				  "sensor.yaml line 9: T_BS data holds 17 numbers, not rows x cols = 4 x 4");
 }
 
 /* The ground truth uri carries fails with code and a message holding needle. */
@@ -579,6 +607,7 @@ int main(void)
 		cmocka_unit_test(test_kitti_ground_truth_beside),
 		cmocka_unit_test(test_tum_freiburg_defaults),
 		cmocka_unit_test(test_euroc_bad_frames),
+		cmocka_unit_test(test_euroc_csv_line_ends),
 		cmocka_unit_test(test_euroc_bad_sensor),
 		cmocka_unit_test(test_euroc_bad_ground_truth),
 		cmocka_unit_test(test_tum_bad_input),

@@ -15,6 +15,7 @@
 #include "harness.h"
 
 #include "capture/dataset.h"
+#include "capture/euroc.h"
 
 static void test_parse_ns(void **state)
 {
@@ -121,6 +122,101 @@ static void test_frames_a_microsecond_apart(void **state)
 	mvod_ds_frames_free(&f);
 }
 
+/*
+ * MH_01_easy's mav0/cam0/sensor.yaml as the EuRoC MAV dataset publishes it (the copy in
+ * andreruas/scratch_slam, byte for byte: comments, T_BS's data over four lines, no newline
+ * at the end), in the ASL dataset format.
+ */
+static const char euroc_mh01_cam0[] =
+	"# General sensor definitions.\n"
+	"sensor_type: camera\n"
+	"comment: VI-Sensor cam0 (MT9M034)\n"
+	"\n"
+	"# Sensor extrinsics wrt. the body-frame.\n"
+	"T_BS:\n"
+	"  cols: 4\n"
+	"  rows: 4\n"
+	"  data: [0.0148655429818, -0.999880929698, 0.00414029679422, -0.0216401454975,\n"
+	"         0.999557249008, 0.0149672133247, 0.025715529948, -0.064676986768,\n"
+	"        -0.0257744366974, 0.00375618835797, 0.999660727178, 0.00981073058949,\n"
+	"         0.0, 0.0, 0.0, 1.0]\n"
+	"\n"
+	"# Camera specific definitions.\n"
+	"rate_hz: 20\n"
+	"resolution: [752, 480]\n"
+	"camera_model: pinhole\n"
+	"intrinsics: [458.654, 457.296, 367.215, 248.375] #fu, fv, cu, cv\n"
+	"distortion_model: radial-tangential\n"
+	"distortion_coefficients: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]";
+
+/* text as a sensor.yaml, read: 0 or the error, its message in err. */
+static int load_sensor(const char *text, struct mvod_camera *cam, struct mvod_pose *bs,
+		       char *err, size_t errlen)
+{
+	const char *path = harness_tmp_path("sensor.yaml");
+	harness_write_file(path, text);
+	return mvod_euroc_sensor_load(path, cam, bs, err, errlen);
+}
+
+static void expect_mh01(const char *text)
+{
+	struct mvod_camera cam;
+	struct mvod_pose bs;
+	char err[512] = "";
+	if (load_sensor(text, &cam, &bs, err, sizeof(err)) != 0)
+		fail_msg("%s", err);
+	assert_int_equal(cam.width, 752);
+	assert_int_equal(cam.height, 480);
+	assert_true(cam.fx == 458.654 && cam.fy == 457.296 && cam.cx == 367.215 &&
+		    cam.cy == 248.375);
+	assert_int_equal(cam.model, MVOD_CAM_PINHOLE_RADTAN);
+	assert_int_equal(cam.n_dist, 4);
+	assert_true(cam.dist[0] == -0.28340811 && cam.dist[3] == 1.76187114e-05);
+	/* T_BS row-major: R's first row, then t's x at the end of it. */
+	assert_true(bs.R[0] == 0.0148655429818 && bs.R[1] == -0.999880929698);
+	assert_true(bs.R[8] == 0.999660727178);
+	assert_true(bs.t[0] == -0.0216401454975 && bs.t[2] == 0.00981073058949);
+}
+
+/*
+ * The published sensor.yaml, and the copy a FileStorage reader wants (Kimera-VIO: "Make sure
+ * that each YAML file has %YAML:1.0 as first line"; OpenCV itself writes "%YAML:1.0\n---"),
+ * which plain libyaml stops at on line 1; T_BS also as OpenCV writes a matrix.
+ */
+static void test_euroc_sensor_as_published(void **state)
+{
+	(void)state;
+	char text[4096];
+	expect_mh01(euroc_mh01_cam0);
+	snprintf(text, sizeof(text), "%%YAML:1.0\n%s\n", euroc_mh01_cam0);
+	expect_mh01(text);
+	snprintf(text, sizeof(text), "%%YAML:1.0\n---\n%s", euroc_mh01_cam0);
+	const char *t = strstr(text, "T_BS:\n");
+	char tagged[4096];
+	snprintf(tagged, sizeof(tagged), "%.*sT_BS: !!opencv-matrix\n  dt: d\n%s",
+		 (int)(t - text), text, t + strlen("T_BS:\n"));
+	expect_mh01(tagged);
+}
+
+/* A broken sensor.yaml names the file and the line, OpenCV's directive counted as line 1. */
+static void test_euroc_sensor_lines(void **state)
+{
+	(void)state;
+	char text[4096], err[512] = "";
+	struct mvod_camera cam;
+	struct mvod_pose bs;
+	snprintf(text, sizeof(text), "%%YAML:1.0\n%s", euroc_mh01_cam0);
+	*strstr(text, "[752") = '{';
+	assert_int_equal(load_sensor(text, &cam, &bs, err, sizeof(err)), -EINVAL);
+	if (!strstr(err, "sensor.yaml: not YAML: YAML error at line 17"))
+		fail_msg("%s", err);
+	snprintf(text, sizeof(text), "%%YAML:1.0\n%s", euroc_mh01_cam0);
+	memcpy(strstr(text, "rows: 4"), "rows: 3", 7);
+	assert_int_equal(load_sensor(text, &cam, &bs, err, sizeof(err)), -EINVAL);
+	if (!strstr(err, "sensor.yaml line 10: T_BS data holds 16 numbers, not rows x cols = 3 x 4"))
+		fail_msg("%s", err);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -128,6 +224,8 @@ int main(void)
 		cmocka_unit_test(test_parse_seconds),
 		cmocka_unit_test(test_parse_pose),
 		cmocka_unit_test(test_frames_a_microsecond_apart),
+		cmocka_unit_test(test_euroc_sensor_as_published),
+		cmocka_unit_test(test_euroc_sensor_lines),
 	};
 	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }
