@@ -27,7 +27,7 @@
 
 #define UNKNOWN_FORMAT                                                                            \
 	"unknown calibration format: not mvod JSON, a [K, dist] JSON pair, KITTI calib.txt, "      \
-	"OpenCV YAML/XML or ROS camera_info YAML"
+	"DSO camera.txt, OpenCV YAML/XML or ROS camera_info YAML"
 
 /* A YAML node (with its document, which resolves its children) or an XML element; none when absent. */
 struct fs_node {
@@ -164,7 +164,7 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 		{"plumb_bob", MVOD_CAM_PINHOLE_RADTAN},  {"rational_polynomial", MVOD_CAM_PINHOLE_RADTAN},
 		{"radtan", MVOD_CAM_PINHOLE_RADTAN},     {"pinhole-radtan", MVOD_CAM_PINHOLE_RADTAN},
 		{"equidistant", MVOD_CAM_FISHEYE_KB4},   {"fisheye", MVOD_CAM_FISHEYE_KB4},
-		{"fisheye-kb4", MVOD_CAM_FISHEYE_KB4},
+		{"fisheye-kb4", MVOD_CAM_FISHEYE_KB4},   {"fov", MVOD_CAM_FOV},
 	};
 	bool plain;
 	char *name = scalar(n, &plain);
@@ -175,7 +175,8 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 	xmlFree(name);
 	if (!known)
 		return mvod_errf(err, errlen, -EINVAL,
-				 "\"distortion_model\" must be plumb_bob, rational_polynomial, equidistant or fisheye");
+				 "\"distortion_model\" must be plumb_bob, rational_polynomial, equidistant, "
+				 "fisheye or fov");
 	*model = names[i].model;
 	return 0;
 }
@@ -242,7 +243,8 @@ static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, si
 	if (!present(k))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "unknown calibration format: no \"camera_matrix\" key, so not OpenCV or ROS "
-				 "YAML (mvod also reads mvod JSON, [K, dist] JSON and KITTI calib.txt)");
+				 "YAML (mvod also reads mvod JSON, [K, dist] JSON, KITTI calib.txt and DSO "
+				 "camera.txt)");
 	if ((ret = read_matrix(k, kkey, &rows, &cols, &m, err, errlen)))
 		return ret;
 	if (rows != 3 || cols != 3 || mvod_calib_set_K(v, c) != 0)
