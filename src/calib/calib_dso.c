@@ -17,6 +17,7 @@
 
 #include "calib/calib_internal.h"
 #include "util/errbuf.h"
+#include "util/numbers.h"
 
 static const struct {
 	const char *name;
@@ -51,22 +52,6 @@ static int line_at(const char *text, size_t lineno, char *buf, size_t len)
 	return 0;
 }
 
-/* Up to max finite numbers at s, to its end; how many, or -1 for anything else there. */
-static int numbers(const char *s, double *v, int max)
-{
-	int n = 0;
-	for (char *end;; s = end) {
-		s += strspn(s, " \t");
-		if (!*s)
-			return n;
-		if (n == max)
-			return -1;
-		v[n] = strtod(s, &end);
-		if (end == s || !isfinite(v[n++]) || (*end && *end != ' ' && *end != '\t'))
-			return -1;
-	}
-}
-
 /* The model named at the start of line, or -1 for none of DSO's names. */
 static int named(const char *line)
 {
@@ -85,9 +70,10 @@ static int lens_line(const char *line, enum mvod_cam_model *model, double v[8])
 	int i = named(s);
 	if (i >= 0) {
 		*model = models[i].model;
-		return numbers(s + strlen(models[i].name), v, 8) == models[i].n ? models[i].n : -1;
+		int n = mvod_parse_numbers(s + strlen(models[i].name), v, 8);
+		return n == models[i].n ? n : -1;
 	}
-	int n = numbers(s, v, 8);
+	int n = mvod_parse_numbers(s, v, 8);
 	*model = n == 5 ? MVOD_CAM_FOV : MVOD_CAM_PINHOLE_RADTAN;
 	return n == 5 || n == 8 ? n : -1;
 }
@@ -105,8 +91,8 @@ bool mvod_calib_is_dso(const char *text)
 static bool size_line(const char *line, int *w, int *h)
 {
 	double v[2];
-	if (numbers(line, v, 2) != 2 || v[0] != floor(v[0]) || v[1] != floor(v[1]) || v[0] < 1 ||
-	    v[1] < 1 || v[0] > 65535 || v[1] > 65535)
+	if (mvod_parse_numbers(line, v, 2) != 2 || v[0] != floor(v[0]) || v[1] != floor(v[1]) ||
+	    v[0] < 1 || v[1] < 1 || v[0] > 65535 || v[1] > 65535)
 		return false;
 	*w = (int)v[0];
 	*h = (int)v[1];
@@ -158,7 +144,7 @@ static int rectification(const char *text, const char *path, char *err, size_t e
 	if (!l3[strspn(l3, " \t")])
 		return 0;
 	if (strcmp(l3, "crop") != 0 && strcmp(l3, "full") != 0 && strcmp(l3, "none") != 0 &&
-	    !(numbers(l3, v, 5) == 5 && v[4] == 0))
+	    !(mvod_parse_numbers(l3, v, 5) == 5 && v[4] == 0))
 		return mvod_errf(err, errlen, -EINVAL, "%s line 3: \"%.40s\" is none of DSO's "
 				 "rectifications (crop, full, none, or fx fy cx cy 0)", path, l3);
 	if (!size_line(l4, &w, &h))

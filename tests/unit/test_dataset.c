@@ -9,6 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+#include <time.h>
 
 #include <cmocka.h>
 
@@ -16,6 +17,7 @@
 
 #include "capture/dataset.h"
 #include "capture/euroc.h"
+#include "capture/kitti_raw.h"
 
 static void test_parse_ns(void **state)
 {
@@ -217,6 +219,172 @@ static void test_euroc_sensor_lines(void **state)
 		fail_msg("%s", err);
 }
 
+/* KITTI raw's timestamps.txt: calendar times to the nanosecond, against glibc's timegm. */
+static void test_parse_calendar(void **state)
+{
+	(void)state;
+	const char *end;
+	int64_t ns;
+	/* drive 0001's first line */
+	assert_int_equal(mvod_ds_parse_calendar("2011-09-26 13:02:25.964389445", &end, &ns), 0);
+	struct tm tm = {.tm_year = 111, .tm_mon = 8, .tm_mday = 26, .tm_hour = 13, .tm_min = 2,
+			.tm_sec = 25};
+	assert_true(ns == (int64_t)timegm(&tm) * 1000000000 + 964389445);
+	assert_string_equal(end, "");
+	/* Leap days, the last second of a year, no decimals, digits past nine dropped. */
+	static const char *const days[] = {"2012-02-29 00:00:00", "2000-02-29 12:00:00.5",
+					   "2011-12-31 23:59:59.1234567891", "1970-01-01 00:00:00"};
+	static const int ymd[4][6] = {{112, 1, 29, 0, 0, 0}, {100, 1, 29, 12, 0, 0},
+				      {111, 11, 31, 23, 59, 59}, {70, 0, 1, 0, 0, 0}};
+	static const int64_t frac[4] = {0, 500000000, 123456789, 0};
+	for (int i = 0; i < 4; i++) {
+		struct tm t = {.tm_year = ymd[i][0], .tm_mon = ymd[i][1], .tm_mday = ymd[i][2],
+			       .tm_hour = ymd[i][3], .tm_min = ymd[i][4], .tm_sec = ymd[i][5]};
+		assert_int_equal(mvod_ds_parse_calendar(days[i], &end, &ns), 0);
+		assert_true(ns == (int64_t)timegm(&t) * 1000000000 + frac[i]);
+	}
+	/* No such day, hour or second; a field of other width; no date before 1970. */
+	static const char *const bad[] = {"2011-02-29 00:00:00", "1900-02-29 00:00:00",
+					  "2011-09-31 00:00:00", "2011-09-26 24:00:00",
+					  "2011-09-26 13:02:60", "2011-9-26 13:02:25",
+					  "2011-09-26T13:02:25", "1969-12-31 23:59:59",
+					  "20110-09-26 13:02:25", "2011-09-26 13:02"};
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++)
+		if (mvod_ds_parse_calendar(bad[i], &end, &ns) != -EINVAL)
+			fail_msg("\"%s\" read as a time", bad[i]);
+}
+
+/*
+ * The devkit's OXTS conversion: the Mercator projection is metric at the scale's latitude
+ * (1e-5 degrees north is 1.1131949 m on its 6378137 m sphere: 6378137 pi / 180 1e-5), east by
+ * the scale; the Euler angles turn the IMU's axes as dataformat.txt says. Bounds: a step
+ * centred on the latitude leaves the projection's third-order term (1e-14 relative) and the
+ * roundings of coordinates near 5.4e6 m (1e-9 m each).
+ */
+static void test_oxts_pose(void **state)
+{
+	(void)state;
+	const double lat = 49.011213, lon = 8.4235924, s = mvod_oxts_scale(lat);
+	struct mvod_pose a, b;
+	mvod_oxts_pose((double[6]){lat - 0.5e-5, lon, 112.83, 0, 0, 0}, s, &a);
+	mvod_oxts_pose((double[6]){lat + 0.5e-5, lon + 1e-5, 113.83, 0, 0, 0}, s, &b);
+	const double m = 6378137 * M_PI / 180 * 1e-5;
+	assert_true(fabs(b.t[1] - a.t[1] - m) < 1e-8);
+	assert_true(fabs(b.t[0] - a.t[0] - s * m) < 1e-8);
+	assert_true(b.t[2] - a.t[2] == 1);
+	assert_true(a.R[0] == 1 && a.R[4] == 1 && a.R[8] == 1);
+	/* yaw pi/2: forward (x) is north; pitch 0.1: forward dips; roll 0.1: left (y) rises. */
+	mvod_oxts_pose((double[6]){lat, lon, 0, 0, 0, M_PI / 2}, s, &a);
+	assert_true(fabs(a.R[3] - 1) < 1e-15 && fabs(a.R[0]) < 1e-15);
+	mvod_oxts_pose((double[6]){lat, lon, 0, 0, 0.1, 0}, s, &a);
+	assert_true(fabs(a.R[6] + sin(0.1)) < 1e-15);
+	mvod_oxts_pose((double[6]){lat, lon, 0, 0.1, 0, 0}, s, &a);
+	assert_true(fabs(a.R[7] - sin(0.1)) < 1e-15);
+}
+
+/*
+ * 2011_09_26's calibration as the KITTI raw download has it (calib_imu_to_velo.txt and
+ * calib_velo_to_cam.txt whole, camera 00's lines of calib_cam_to_cam.txt).
+ */
+static const char cam_to_cam[] =
+	"calib_time: 09-Jan-2012 13:57:47\n"
+	"corner_dist: 9.950000e-02\n"
+	"S_00: 1.392000e+03 5.120000e+02\n"
+	"S_rect_00: 1.242000e+03 3.750000e+02\n"
+	"R_rect_00: 9.999239e-01 9.837760e-03 -7.445048e-03 -9.869795e-03 9.999421e-01 "
+	"-4.278459e-03 7.402527e-03 4.351614e-03 9.999631e-01\n"
+	"P_rect_00: 7.215377e+02 0.000000e+00 6.095593e+02 0.000000e+00 0.000000e+00 7.215377e+02 "
+	"1.728540e+02 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00\n";
+static const char velo_to_cam[] =
+	"calib_time: 15-Mar-2012 11:37:16\n"
+	"R: 7.533745e-03 -9.999714e-01 -6.166020e-04 1.480249e-02 7.280733e-04 -9.998902e-01 "
+	"9.998621e-01 7.523790e-03 1.480755e-02\n"
+	"T: -4.069766e-03 -7.631618e-02 -2.717806e-01\n"
+	"delta_f: 0.000000e+00 0.000000e+00\n"
+	"delta_c: 0.000000e+00 0.000000e+00\n";
+static const char imu_to_velo[] =
+	"calib_time: 25-May-2012 16:47:16\n"
+	"R: 9.999976e-01 7.553071e-04 -2.035826e-03 -7.854027e-04 9.998898e-01 -1.482298e-02 "
+	"2.024406e-03 1.482454e-02 9.998881e-01\n"
+	"T: -8.086759e-01 3.195559e-01 -7.997231e-01\n";
+
+static const char *write_calib(const char *ctc)
+{
+	const char *dir = harness_tmpdir();
+	char path[512];
+	snprintf(path, sizeof(path), "%s/calib_cam_to_cam.txt", dir);
+	harness_write_file(path, ctc);
+	snprintf(path, sizeof(path), "%s/calib_velo_to_cam.txt", dir);
+	harness_write_file(path, velo_to_cam);
+	snprintf(path, sizeof(path), "%s/calib_imu_to_velo.txt", dir);
+	harness_write_file(path, imu_to_velo);
+	return dir;
+}
+
+static void test_kitti_raw_calib(void **state)
+{
+	(void)state;
+	struct mvod_camera cam;
+	struct mvod_pose ci, ic;
+	char err[512] = "";
+	if (mvod_kitti_raw_calib(write_calib(cam_to_cam), &cam, &ci, err, sizeof(err)))
+		fail_msg("%s", err);
+	assert_true(cam.width == 1242 && cam.height == 375 && cam.fx == 721.5377 &&
+		    cam.fy == 721.5377 && cam.cx == 609.5593 && cam.cy == 172.854 && cam.n_dist == 0);
+	/*
+	 * A rotation to rounding, and the camera 1.08 m ahead of the IMU, 0.31 m right, 0.73 m
+	 * up: the files' R and T composed apart (R^T for the inverse), within 1e-6 m since the
+	 * files' rotations are orthonormal to 1e-7 and the lever arm is 1.3 m.
+	 */
+	double RtR[9];
+	mvod_mat3_mul_at(ci.R, ci.R, RtR);
+	for (int k = 0; k < 9; k++)
+		assert_true(fabs(RtR[k] - (k % 4 == 0)) < 1e-15);
+	mvod_pose_inverse(&ci, &ic);
+	const double where[3] = {1.0833019124837928, -0.3098888727850286, 0.7299198345507933};
+	assert_true(mvod_vec3_dist(ic.t, where) < 1e-6);
+	/* The camera looks along the IMU's x: its z axis in the IMU frame, R's third column. */
+	assert_true(ic.R[2] > 0.9998);
+	/* A key missing, or short of numbers, names the file and the line. */
+	char text[2048];
+	snprintf(text, sizeof(text), "%s", cam_to_cam);
+	*strstr(text, "P_rect_00") = 'Q';
+	assert_int_equal(mvod_kitti_raw_calib(write_calib(text), &cam, &ci, err, sizeof(err)),
+			 -EINVAL);
+	assert_non_null(strstr(err, "calib_cam_to_cam.txt has no P_rect_00"));
+	snprintf(text, sizeof(text), "%s", cam_to_cam);
+	memcpy(strstr(text, "3.750000e+02"), "3.750000e+0x", 12);
+	assert_int_equal(mvod_kitti_raw_calib(write_calib(text), &cam, &ci, err, sizeof(err)),
+			 -EINVAL);
+	assert_non_null(strstr(err, "calib_cam_to_cam.txt line 4: S_rect_00 must be 2 numbers"));
+	snprintf(text, sizeof(text), "%sS_rect_00: 1.242000e+03 3.750000e+02\n", cam_to_cam);
+	assert_int_equal(mvod_kitti_raw_calib(write_calib(text), &cam, &ci, err, sizeof(err)),
+			 -EINVAL);
+	assert_non_null(strstr(err, "calib_cam_to_cam.txt line 7: S_rect_00 again (first on line 4)"));
+}
+
+static void test_oxts_read(void **state)
+{
+	(void)state;
+	const char *path = harness_tmp_path("0000000000.txt");
+	/* drive 0001's first packet, as the dataset prints it. */
+	harness_write_file(path, "49.015003823272 8.4342971002335 116.43032836914 0.035752 0.00903 "
+			   "-1.6071159189143 -2.2207754262503 -12.930025311342 12.872213862227 "
+			   "2.4081542046026 0.14524627208781 -0.27429016623163 -0.93233011838542 "
+			   "9.6936612373749 -0.80211604962628 -0.50221005398798 9.8069093155893 "
+			   "0.013402052487622 0.016117592845283 -0.0027232130356244 "
+			   "0.013223419811708 0.017002025279419 -0.0022223389802154 "
+			   "0.11602428090011 0.030618340395178 4 11 6 6 6\n");
+	double p[6];
+	char err[512] = "";
+	if (mvod_oxts_read(path, p, err, sizeof(err)))
+		fail_msg("%s", err);
+	assert_true(p[0] == 49.015003823272 && p[5] == -1.6071159189143);
+	harness_write_file(path, "49.01 8.43 116.4 0.03 0.009 -1.6\n");
+	assert_int_equal(mvod_oxts_read(path, p, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "0000000000.txt line 1: an OXTS packet is 30 numbers"));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -226,6 +394,10 @@ int main(void)
 		cmocka_unit_test(test_frames_a_microsecond_apart),
 		cmocka_unit_test(test_euroc_sensor_as_published),
 		cmocka_unit_test(test_euroc_sensor_lines),
+		cmocka_unit_test(test_parse_calendar),
+		cmocka_unit_test(test_oxts_pose),
+		cmocka_unit_test(test_kitti_raw_calib),
+		cmocka_unit_test(test_oxts_read),
 	};
 	return cmocka_run_group_tests(tests, NULL, harness_teardown);
 }
