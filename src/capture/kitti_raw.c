@@ -126,6 +126,15 @@ static int camera_at(const struct kitti_raw *k, size_t i, double *scale, struct 
 	if (i == 0)
 		*scale = mvod_oxts_scale(packet[0]);
 	mvod_oxts_pose(packet, *scale, &imu);
+	/* The one check of every ground-truth pose (traj.h): near a pole the projection is not. */
+	double rt[12];
+	char reason[256];
+	for (int r = 0; r < 3; r++) {
+		memcpy(rt + 4 * r, imu.R + 3 * r, 3 * sizeof(double));
+		rt[4 * r + 3] = imu.t[r];
+	}
+	if (mvod_pose_from_matrix(rt, &imu, reason, sizeof(reason)))
+		return mvod_errf(err, errlen, -EINVAL, "%s line 1: %s", path, reason);
 	mvod_pose_inverse(&k->cam_imu, &imu_cam);
 	mvod_pose_compose(&imu, &imu_cam, cam);
 	return 0;

@@ -812,6 +812,10 @@ static void test_kitti_raw_bad_files(void **state)
 	snprintf(path, sizeof(path), "%s/" KITTI_RAW_DRIVE "/oxts/data/0000000005.txt", bad);
 	harness_write_file(path, "49.01 8.42 112.8 0 0 0\n");
 	expect_bad_gt(uri, -EINVAL, "oxts/data/0000000005.txt line 1: an OXTS packet is 30 numbers");
+	/* 1e-10 degrees from the pole the projection puts the IMU 1.2e8 m north: no pose (traj.h). */
+	harness_write_file(path, "89.9999999999 8.42 112.8 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 "
+			   "0.05 0.02 4 11 6 6 6\n");
+	expect_bad_gt(uri, -EINVAL, "oxts/data/0000000005.txt line 1: position (");
 	/* A time that is no calendar time. */
 	snprintf(path, sizeof(path), "%s/" KITTI_RAW_DRIVE "/image_00/timestamps.txt", bad);
 	edit_file(path, "13:02:26.164389445", "13:02:26,164389445");
