@@ -43,11 +43,13 @@ public:
 
 // --format euroc, tum, tum-mono or kitti-raw into dir; cam is what the layout's calibration
 // file says, fps the frame rate. Refuses (kExitUsage) a lens the layout cannot describe.
-std::unique_ptr<LayoutWriter> make_layout_writer(const std::string &format, const std::filesystem::path &dir,
+std::unique_ptr<LayoutWriter> make_layout_writer(const std::string &format,
+						 const std::filesystem::path &dir,
 						 const Camera &cam, double fps);
 
 // The KITTI raw layout (kitti_raw.cpp).
-std::unique_ptr<LayoutWriter> make_kitti_raw_writer(const std::filesystem::path &dir, const Camera &cam);
+std::unique_ptr<LayoutWriter> make_kitti_raw_writer(const std::filesystem::path &dir,
+						    const Camera &cam);
 
 // v printed with conv ('g' or 'e') and the fewest digits from min_digits that read back as v:
 // the files say exactly what was rendered, in the form the published ones print.

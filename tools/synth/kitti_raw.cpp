@@ -36,26 +36,28 @@ constexpr double kEarthRadius = 6378137; // the devkit's (and pykitti's) Mercato
 // 2011_09_26's files as the KITTI raw download has them: calib_imu_to_velo.txt and
 // calib_velo_to_cam.txt whole; of calib_cam_to_cam.txt camera 00's lines, S_rect_00 and
 // P_rect_00 then replaced by the rendering's size and intrinsics.
-constexpr char kImuToVelo[] = "calib_time: 25-May-2012 16:47:16\n"
-			      "R: 9.999976e-01 7.553071e-04 -2.035826e-03 -7.854027e-04 9.998898e-01 -1.482298e-02 "
-			      "2.024406e-03 1.482454e-02 9.998881e-01\n"
-			      "T: -8.086759e-01 3.195559e-01 -7.997231e-01\n";
-constexpr char kVeloToCam[] = "calib_time: 15-Mar-2012 11:37:16\n"
-			      "R: 7.533745e-03 -9.999714e-01 -6.166020e-04 1.480249e-02 7.280733e-04 -9.998902e-01 "
-			      "9.998621e-01 7.523790e-03 1.480755e-02\n"
-			      "T: -4.069766e-03 -7.631618e-02 -2.717806e-01\n"
-			      "delta_f: 0.000000e+00 0.000000e+00\n"
-			      "delta_c: 0.000000e+00 0.000000e+00\n";
+constexpr char kImuToVelo[] =
+    "calib_time: 25-May-2012 16:47:16\n"
+    "R: 9.999976e-01 7.553071e-04 -2.035826e-03 -7.854027e-04 9.998898e-01 -1.482298e-02 "
+    "2.024406e-03 1.482454e-02 9.998881e-01\n"
+    "T: -8.086759e-01 3.195559e-01 -7.997231e-01\n";
+constexpr char kVeloToCam[] =
+    "calib_time: 15-Mar-2012 11:37:16\n"
+    "R: 7.533745e-03 -9.999714e-01 -6.166020e-04 1.480249e-02 7.280733e-04 -9.998902e-01 "
+    "9.998621e-01 7.523790e-03 1.480755e-02\n"
+    "T: -4.069766e-03 -7.631618e-02 -2.717806e-01\n"
+    "delta_f: 0.000000e+00 0.000000e+00\n"
+    "delta_c: 0.000000e+00 0.000000e+00\n";
 constexpr char kCamToCamHead[] =
-	"calib_time: 09-Jan-2012 13:57:47\n"
-	"corner_dist: 9.950000e-02\n"
-	"S_00: 1.392000e+03 5.120000e+02\n"
-	"K_00: 9.842439e+02 0.000000e+00 6.900000e+02 0.000000e+00 9.808141e+02 2.331966e+02 0.000000e+00 "
-	"0.000000e+00 1.000000e+00\n"
-	"D_00: -3.728755e-01 2.037299e-01 2.219027e-03 1.383707e-03 -7.233722e-02\n"
-	"R_00: 1.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00 0.000000e+00 "
-	"0.000000e+00 1.000000e+00\n"
-	"T_00: 2.573699e-16 -1.059758e-16 1.614870e-16\n";
+    "calib_time: 09-Jan-2012 13:57:47\n"
+    "corner_dist: 9.950000e-02\n"
+    "S_00: 1.392000e+03 5.120000e+02\n"
+    "K_00: 9.842439e+02 0.000000e+00 6.900000e+02 0.000000e+00 9.808141e+02 2.331966e+02 "
+    "0.000000e+00 0.000000e+00 1.000000e+00\n"
+    "D_00: -3.728755e-01 2.037299e-01 2.219027e-03 1.383707e-03 -7.233722e-02\n"
+    "R_00: 1.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 1.000000e+00 0.000000e+00 "
+    "0.000000e+00 0.000000e+00 1.000000e+00\n"
+    "T_00: 2.573699e-16 -1.059758e-16 1.614870e-16\n";
 constexpr double kRectR[9] = {9.999239e-01, 9.837760e-03,  -7.445048e-03, -9.869795e-03, 9.999421e-01,
 			      -4.278459e-03, 7.402527e-03, 4.351614e-03,  9.999631e-01};
 
@@ -91,7 +93,8 @@ cv::Matx33d orthonormal(const cv::Matx33d &M)
 // pykitti's raw.py composes it (camera 0's P_rect_00 shifts nothing).
 Pose camera_from_imu()
 {
-	const Pose p = compose(compose({cv::Matx33d(kRectR), cv::Vec3d()}, rigid(kVeloToCam)), rigid(kImuToVelo));
+	const Pose p = compose(compose({cv::Matx33d(kRectR), cv::Vec3d()}, rigid(kVeloToCam)),
+			       rigid(kImuToVelo));
 	return {orthonormal(p.R), p.t};
 }
 
@@ -106,7 +109,8 @@ void write_text(const fs::path &file, const std::string &text)
 	std::ofstream out(file, std::ios::binary);
 	out << text;
 	if (!out)
-		throw Failure(kExitFailure, "cannot write " + file.string() + ": " + std::strerror(errno));
+		throw Failure(kExitFailure,
+			      "cannot write " + file.string() + ": " + std::strerror(errno));
 }
 
 void write_calibration(const fs::path &date, const Camera &cam)
@@ -120,8 +124,9 @@ void write_calibration(const fs::path &date, const Camera &cam)
 	std::string p = "P_rect_00:";
 	for (double v : P)
 		p += " " + sci(v);
-	write_text(date / "calib_cam_to_cam.txt", std::string(kCamToCamHead) + "S_rect_00: " + sci(cam.width) +
-							  " " + sci(cam.height) + "\n" + rect + "\n" + p + "\n");
+	write_text(date / "calib_cam_to_cam.txt",
+		   std::string(kCamToCamHead) + "S_rect_00: " + sci(cam.width) + " " +
+		       sci(cam.height) + "\n" + rect + "\n" + p + "\n");
 }
 
 // The devkit's Mercator projection (pykitti's pose_from_oxts_packet), east and north metres
@@ -156,10 +161,13 @@ private:
 };
 
 KittiRawWriter::KittiRawWriter(const fs::path &dir, const Camera &cam)
-	: drive_(dir / kDate / kDrive), cam_imu_(camera_from_imu()), scale_(std::cos(kLat0 * M_PI / 180))
+    : drive_(dir / kDate / kDrive), cam_imu_(camera_from_imu()),
+      scale_(std::cos(kLat0 * M_PI / 180))
 {
 	if (!cam.dist.empty())
-		throw Failure(kExitUsage, "--format kitti-raw: the _sync drives' images are rectified, so no lens");
+		throw Failure(
+		    kExitUsage,
+		    "--format kitti-raw: the _sync drives' images are rectified, so no lens");
 	// mvod's first camera looks east, level: its x (right) south, y (down) down, z east.
 	enu_world_ = {cv::Matx33d(0, 0, 1, -1, 0, 0, 0, -1, 0), cv::Vec3d(0, 0, 0)};
 	std::error_code ec;
@@ -176,9 +184,10 @@ KittiRawWriter::KittiRawWriter(const fs::path &dir, const Camera &cam)
 std::string KittiRawWriter::oxts(const Pose &camera) const
 {
 	const Pose imu = compose(compose(enu_world_, camera), cam_imu_);
-	const cv::Vec2d geo = geographic(mercator(kLat0, kLon0, scale_) + cv::Vec2d(imu.t[0], imu.t[1]) -
-						 cv::Vec2d(origin_[0], origin_[1]),
-					 scale_);
+	const cv::Vec2d geo =
+	    geographic(mercator(kLat0, kLon0, scale_) + cv::Vec2d(imu.t[0], imu.t[1]) -
+			   cv::Vec2d(origin_[0], origin_[1]),
+		       scale_);
 	const cv::Matx33d &R = imu.R; // Rz(yaw) Ry(pitch) Rx(roll), the devkit's order
 	const double v[6] = {geo[0],
 			     geo[1],
@@ -231,7 +240,8 @@ void KittiRawWriter::close()
 	image_times_.close();
 	oxts_times_.close();
 	if (!image_times_ || !oxts_times_)
-		throw Failure(kExitFailure, "cannot write " + (drive_ / "image_00" / "timestamps.txt").string());
+		throw Failure(kExitFailure,
+			      "cannot write " + (drive_ / "image_00" / "timestamps.txt").string());
 }
 
 } // namespace
