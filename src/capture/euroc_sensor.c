@@ -153,8 +153,8 @@ static int load(struct sensor *s, const char *text, char *err, size_t errlen)
 	char why[256];
 	int ret = mvod_cvyaml_load(text, &s->doc, why, sizeof(why));
 	if (ret)
-		return mvod_errf(err, errlen, ret, "%s: %s%s", s->path,
-				 ret == -EINVAL ? "not YAML: " : "", why);
+		return mvod_errf(err, errlen, ret, "%s%s%s", s->path,
+				 ret == -EINVAL ? ": not YAML: " : " ", why); /* guard: "line N: ..." */
 	s->root = yaml_document_get_root_node(&s->doc);
 	if (!s->root || s->root->type != YAML_MAPPING_NODE)
 		ret = mvod_errf(err, errlen, -EINVAL, "%s is not a EuRoC sensor.yaml (no mapping "
