@@ -507,7 +507,8 @@ static void test_mono_negative_principal_point(void **state)
 	snprintf(path, sizeof(path), "%s/times.txt", dir);
 	harness_write_file(path, text);
 	snprintf(path, sizeof(path), "%s/camera.txt", dir);
-	harness_write_file(path, "Pinhole 576 576 -5 120 0\n320 240\ncrop\n320 240\n");
+	/* Both below 1, as fractions would be: cy = 120 alone kept the old rule from firing. */
+	harness_write_file(path, "Pinhole 576 576 -5 -3 0\n320 240\ncrop\n320 240\n");
 	snprintf(path, sizeof(path), "tum:%s", dir);
 	struct mvod_source *src;
 	char err[512];
@@ -515,7 +516,7 @@ static void test_mono_negative_principal_point(void **state)
 		fail_msg("%s", err);
 	struct mvod_camera cam;
 	assert_int_equal(mvod_source_camera(src, &cam), 0);
-	assert_true(cam.fx == 576 && cam.fy == 576 && cam.cx == -5 && cam.cy == 120);
+	assert_true(cam.fx == 576 && cam.fy == 576 && cam.cx == -5 && cam.cy == -3);
 	mvod_source_close(src);
 }
 

@@ -430,6 +430,9 @@ static void test_dso_reader(void **state)
 	assert_true(c.model == MVOD_CAM_PINHOLE_RADTAN && c.n_dist == 0 && c.fx == 320);
 	load_ok("pin2.txt", "Pinhole 400 400 319.5 239.5 0\n640 480\n", &c, MVOD_CALIB_FMT_DSO);
 	assert_true(c.n_dist == 0 && c.cx == 319.5);
+	/* A principal point off the image's top-left (negative) is in pixels, not fractions. */
+	load_ok("pin3.txt", "Pinhole 400 400 -5 -3 0\n640 480\n", &c, MVOD_CALIB_FMT_DSO);
+	assert_true(c.fx == 400 && c.cx == -5 && c.cy == -3);
 	/* RadTan (also 8 bare numbers), EquiDistant and KannalaBrandt. */
 	load_ok("rt.txt", "400 400 319.5 239.5 -0.2 0.05 0.001 -0.001\n640 480\n", &c,
 		MVOD_CALIB_FMT_DSO);
