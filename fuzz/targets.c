@@ -19,8 +19,10 @@
 
 #include <lcm/eventlog.h>
 
+#include "capture/dataset.h"
 #include "capture/euroc.h"
 #include "capture/image_header.h"
+#include "capture/kitti_raw.h"
 #include "capture/png_grey.h"
 #include "capture/uri.h"
 #include "mvod/board.h"
@@ -280,6 +282,33 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	ret = mvod_calib_load(as_file(data, size), &cam, err, sizeof(err));
 #endif
 	check_camera(ret, &cam);
+#elif defined(FUZZ_CALIB_DSO)
+	/* DSO's camera.txt: a camera, its FOV lens's w finite. */
+	struct mvod_camera cam;
+	char *s = as_string(data, size);
+	ret = mvod_calib_parse_dso(s, "camera.txt", &cam, err, sizeof(err));
+	free(s);
+	check_camera(ret, &cam);
+#elif defined(FUZZ_KITTI_RAW)
+	/*
+	 * KITTI raw's line formats: the input as an OXTS packet (a pose: finite, a rotation) and
+	 * each of its lines as a calendar time (within int64 nanoseconds, not before 1970).
+	 */
+	double packet[6];
+	ret = mvod_oxts_read(as_file(data, size), packet, err, sizeof(err));
+	if (!ret) {
+		struct mvod_pose p;
+		mvod_oxts_pose(packet, mvod_oxts_scale(packet[0]), &p);
+		assert(fabs(mvod_mat3_det(p.R) - 1) < 1e-9 && isfinite(p.t[0] + p.t[1] + p.t[2]));
+	}
+	char *s = as_string(data, size);
+	for (char *line = strtok(s, "\n"); line; line = strtok(NULL, "\n")) {
+		const char *end;
+		int64_t ns;
+		if (mvod_ds_parse_calendar(line, &end, &ns) == 0)
+			assert(ns >= 0 && end > line);
+	}
+	free(s);
 #elif defined(FUZZ_EUROC_SENSOR)
 	/* A EuRoC sensor.yaml: a camera, and T_BS a rotation (det 1) with a finite translation. */
 	struct mvod_camera cam;

@@ -16,6 +16,7 @@ extern "C" {
 enum mvod_cam_model {
 	MVOD_CAM_PINHOLE_RADTAN = 0, /* OpenCV model: k1 k2 p1 p2 [k3 [k4 k5 k6 [s1..s4 [tx ty]]]] */
 	MVOD_CAM_FISHEYE_KB4 = 1,    /* Kannala-Brandt, OpenCV fisheye: k1 k2 k3 k4 */
+	MVOD_CAM_FOV = 2,            /* FOV (arctangent) lens of PTAM and DSO: w, radians */
 };
 
 struct mvod_camera {
@@ -65,7 +66,7 @@ struct mvod_calib_meta {
 	char verdict[32];            /* mvod calibrate's verdict ("good", ...), or "" */
 };
 
-/* "pinhole-radtan" / "fisheye-kb4" and back. */
+/* "pinhole-radtan" / "fisheye-kb4" / "fov" and back. */
 const char *mvod_cam_model_name(enum mvod_cam_model model);
 int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out);
 
@@ -81,6 +82,29 @@ bool mvod_camera_has_distortion(const struct mvod_camera *cam);
  */
 int mvod_camera_check(const struct mvod_camera *cam, char *err, size_t errlen);
 
+/*
+ * Where the normalised undistorted point (x, y) (a ray at z = 1) lands, distorted and still
+ * normalised, through cam's lens (src/calib/lens.c).
+ */
+void mvod_camera_distort(const struct mvod_camera *cam, double x, double y, double *xd,
+			 double *yd);
+
+/*
+ * The FOV lens (Devernay and Faugeras; PTAM's ATAN camera, DSO's FOV): a ray at normalised
+ * radius r lands at r_d = atan(2 r tan(w / 2)) / w, w its field of view in radians, in
+ * [0, pi); back, r = tan(r_d w) / (2 tan(w / 2)), INFINITY where no ray lands (r_d w >= pi/2).
+ */
+double mvod_fov_distort_radius(double omega, double r);
+double mvod_fov_undistort_radius(double omega, double rd);
+
+/*
+ * Undistortion maps into an ideal pinhole K (row-major [fx 0 cx; 0 fy cy; 0 0 1]) of w x h
+ * pixels: mapx, mapy[v * w + u] (w * h floats each, the caller's) = where output pixel (u, v)
+ * lies in cam's image, pixels, as cv::remap takes them; for the lens OpenCV has no model for.
+ */
+void mvod_camera_undistort_maps(const struct mvod_camera *cam, const double K[9], int w, int h,
+				float *mapx, float *mapy);
+
 /* The camera matrix [fx 0 cx; 0 fy cy; 0 0 1], row-major (skew is not modelled). */
 void mvod_camera_K(const struct mvod_camera *cam, double K[9]);
 
@@ -92,6 +116,8 @@ void mvod_camera_K(const struct mvod_camera *cam, double K[9]);
 int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen);
 /* KITTI odometry calib.txt: intrinsics from P0, no distortion, image size unknown (0). */
 int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen);
+/* DSO's camera.txt (mvod_calib_parse_dso), whatever its content looks like. */
+int mvod_calib_load_dso(const char *path, struct mvod_camera *cam, char *err, size_t errlen);
 /* mvod JSON from a NUL-terminated buffer (the file reader and the tests share it). */
 int mvod_calib_parse_json(const char *text, struct mvod_camera *cam, char *err, size_t errlen);
 
@@ -108,9 +134,10 @@ enum mvod_calib_format {
 	MVOD_CALIB_FMT_ROS = 2,    /* ROS camera_info YAML */
 	MVOD_CALIB_FMT_KITTI = 3,  /* KITTI odometry calib.txt */
 	MVOD_CALIB_FMT_PAIR = 4,   /* JSON [K, dist] or {"K": K, "dist": dist} (read only) */
+	MVOD_CALIB_FMT_DSO = 5,    /* DSO's camera.txt, as TUM monoVO ships it */
 };
 
-/* "mvod", "opencv", "ros", "kitti", "pair" and back; a longer description for messages. */
+/* "mvod", "opencv", "ros", "kitti", "pair", "dso" and back; a longer description for messages. */
 const char *mvod_calib_format_name(enum mvod_calib_format fmt);
 const char *mvod_calib_format_title(enum mvod_calib_format fmt);
 int mvod_calib_format_parse(const char *name, enum mvod_calib_format *out);
@@ -131,14 +158,27 @@ int mvod_calib_parse_json_pair(const char *text, struct mvod_camera *cam, char *
  * with a DOCTYPE is refused, and only the first YAML document is read): K from
  * camera_matrix (or M1, the first camera of OpenCV's stereo_calib sample), coefficients from
  * distortion_coefficients (or D1). The model is pinhole-radtan unless distortion_model says
- * equidistant, fisheye or fisheye-kb4; OpenCV's own files cannot say, so 4 coefficients are
- * k1 k2 p1 p2 there. image_width and image_height are optional (0 when absent). fmt (may be
- * NULL) says whether the text was OpenCV's (with its header, or XML) or ROS's. The mount is
+ * equidistant, fisheye or fisheye-kb4, or fov (mvod's own value for the FOV lens, 1
+ * coefficient); OpenCV's own files cannot say, so 4 coefficients are k1 k2 p1 p2 there.
+ * image_width and image_height are optional (0 when absent). fmt (may be NULL) says whether
+ * the text was OpenCV's (with its header, or XML) or ROS's. The mount is
  * read from the optional top-level scalars mount_height_m (required with the others),
  * mount_pitch_deg and mount_roll_deg (0 when absent), with mvod JSON's bounds.
  */
 int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam,
 				 enum mvod_calib_format *fmt, char *err, size_t errlen);
+
+/*
+ * DSO's camera.txt (JakobEngel/dso's README; TUM monoVO ships one per sequence): line 1 the
+ * lens, "FOV fx fy cx cy w" (also "ATAN", or 5 bare numbers: FOV, a pinhole when w is 0),
+ * "Pinhole fx fy cx cy 0", "RadTan fx fy cx cy k1 k2 p1 p2" (or 8 bare numbers),
+ * "EquiDistant" or "KannalaBrandt fx fy cx cy k1 k2 k3 k4"; relative (cx, cy < 1: fractions
+ * of the image, pixel edges at 0, as DSO reads them) or in pixels; line 2 "width height";
+ * optional lines 3 and 4, DSO's rectification (crop, full, none or "fx fy cx cy 0") and its
+ * output size, checked and not used. Errors name path and the line.
+ */
+int mvod_calib_parse_dso(const char *text, const char *path, struct mvod_camera *cam, char *err,
+			 size_t errlen);
 
 /*
  * The OpenCV or ROS YAML camera file text with its mount set to mount (height_m, pitch_deg,
@@ -153,14 +193,21 @@ int mvod_calib_filestorage_set_mount(const char *text, const double mount[3], ch
 
 /*
  * Writers, each through a temporary file and rename(). OpenCV: YAML, or XML when path ends in
- * ".xml"; a fisheye camera gets "distortion_model: fisheye" so that mvod reads it back as one.
+ * ".xml"; a fisheye camera gets "distortion_model: fisheye" (an FOV one "fov") so that mvod
+ * reads it back as one.
  * OpenCV and ROS carry the mount as above; KITTI has no place for it.
  * ROS: camera_info YAML (plumb_bob, rational_polynomial or equidistant; needs the image size).
  * KITTI: P0..P3 all [K | 0]; refuses a camera with distortion, since calib.txt cannot carry it.
+ * ROS refuses the FOV lens (image_geometry has no model for it).
+ * DSO: camera.txt in pixels, "MODEL fx fy cx cy params" (FOV, Pinhole, RadTan or
+ * KannalaBrandt), the size, and DSO's "crop" (a distortion-free pinhole: "none") at the same
+ * size; needs the image size, refuses radial-tangential coefficients past the 4th and the
+ * mount (camera.txt has no place for it; the caller notes that).
  */
 int mvod_calib_save_opencv(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
 int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
 int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
+int mvod_calib_save_dso(const char *path, const struct mvod_camera *cam, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

@@ -28,28 +28,6 @@
  */
 #define MAX_STRETCH 4.0
 
-/* Where the normalised undistorted point (x, y) lands, distorted, for cam's model. */
-static void distort(const struct mvod_camera *c, double x, double y, double *xd, double *yd)
-{
-	double k[MVOD_MAX_DIST] = {0};
-	for (int i = 0; i < c->n_dist; i++)
-		k[i] = c->dist[i];
-	double r2 = x * x + y * y;
-	if (c->model == MVOD_CAM_FISHEYE_KB4) {
-		double r = sqrt(r2), th = atan(r), t2 = th * th;
-		double thd = th * (1 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
-		double s = r > 1e-12 ? thd / r : 1;
-		*xd = x * s;
-		*yd = y * s;
-		return;
-	}
-	/* OpenCV's order: k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 (the sensor tilt tx ty is left out). */
-	double radial = (1 + r2 * (k[0] + r2 * (k[1] + r2 * k[4]))) /
-			(1 + r2 * (k[5] + r2 * (k[6] + r2 * k[7])));
-	*xd = x * radial + 2 * k[2] * x * y + k[3] * (r2 + 2 * x * x) + r2 * (k[8] + r2 * k[9]);
-	*yd = y * radial + k[2] * (r2 + 2 * y * y) + 2 * k[3] * x * y + r2 * (k[10] + r2 * k[11]);
-}
-
 /*
  * Walks the ray from the principal point towards image point (px, py) outward, from the axis to
  * 90 degrees off it: the distorted image must move strictly outward until it reaches that
@@ -64,7 +42,7 @@ static int check_ray(const struct mvod_camera *c, double px, double py, const ch
 		return 0;
 	for (int i = 1; i < RAY_STEPS; i++) {
 		double rho = tan(i * (M_PI / 2) / RAY_STEPS), xd, yd;
-		distort(c, rho * ux / un, rho * uy / un, &xd, &yd);
+		mvod_camera_distort(c, rho * ux / un, rho * uy / un, &xd, &yd);
 		/* How far out along the ray, in pixels: negative once the image crosses the axis. */
 		double q = (xd * c->fx * (px - c->cx) + yd * c->fy * (py - c->cy)) / edge;
 		if (!(q > last))
@@ -117,8 +95,9 @@ static int check_numbers(const struct mvod_camera *c, char *err, size_t errlen)
 	for (int i = 0; i < c->n_dist; i++)
 		if (!isfinite(c->dist[i]))
 			return mvod_errf(err, errlen, -EINVAL, "distortion coefficient %s = %g is "
-					 "not a number", c->model == MVOD_CAM_FISHEYE_KB4 && i < 4
-					 ? kb4[i] : opencv[i], c->dist[i]);
+					 "not a number", c->model == MVOD_CAM_FOV ? "w"
+					 : c->model == MVOD_CAM_FISHEYE_KB4 && i < 4 ? kb4[i]
+					 : opencv[i], c->dist[i]);
 	return 0;
 }
 
@@ -149,6 +128,10 @@ int mvod_camera_check(const struct mvod_camera *c, char *err, size_t errlen)
 		ret = in_range("cy", c->cy, -PP_MARGIN * h, (1 + PP_MARGIN) * h, pwhy, err, errlen);
 	if (!ret)
 		ret = check_numbers(c, err, errlen);
+	/* w = pi would put the whole half-space in a finite image circle: no FOV lens does. */
+	if (!ret && c->model == MVOD_CAM_FOV && !(c->dist[0] >= 0 && c->dist[0] < M_PI))
+		ret = mvod_errf(err, errlen, -EINVAL, "the FOV lens's w = %g rad is outside [0, pi) "
+				"(its field of view; TUM monoVO's are 0.9 to 0.95)", c->dist[0]);
 	if (!ret && mvod_camera_has_distortion(c))
 		ret = check_lens(c, err, errlen);
 	return ret;

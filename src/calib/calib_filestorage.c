@@ -21,26 +21,19 @@
 #include <yaml.h>
 
 #include "calib/calib_internal.h"
+#include "util/cvyaml.h"
 #include "util/errbuf.h"
 #include "util/text_guard.h"
 
 #define UNKNOWN_FORMAT                                                                            \
 	"unknown calibration format: not mvod JSON, a [K, dist] JSON pair, KITTI calib.txt, "      \
-	"OpenCV YAML/XML or ROS camera_info YAML"
+	"DSO camera.txt, OpenCV YAML/XML or ROS camera_info YAML"
 
 /* A YAML node (with its document, which resolves its children) or an XML element; none when absent. */
 struct fs_node {
 	yaml_document_t *doc;
 	yaml_node_t *y;
 	xmlNode *x;
-};
-
-/* The entries of a matrix's data: all counted, the first MVOD_MAX_DIST kept. */
-struct fs_numbers {
-	size_t count;
-	size_t bad; /* index of the first entry that is no finite number, or SIZE_MAX */
-	bool bad_is_number; /* that entry is a number, just not a finite one */
-	double v[MVOD_MAX_DIST];
 };
 
 static bool present(struct fs_node n)
@@ -59,25 +52,12 @@ static bool is_map(struct fs_node n)
 	return false;
 }
 
-static bool yaml_scalar_is(const yaml_node_t *n, const char *s)
-{
-	return n && n->type == YAML_SCALAR_NODE && n->data.scalar.length == strlen(s) &&
-	       memcmp(n->data.scalar.value, s, n->data.scalar.length) == 0;
-}
-
 /* A map's value under key (the first, if the key repeats). */
 static struct fs_node child(struct fs_node map, const char *key)
 {
 	struct fs_node out = {.doc = map.doc};
-	if (map.y && map.y->type == YAML_MAPPING_NODE) {
-		for (yaml_node_pair_t *p = map.y->data.mapping.pairs.start; p < map.y->data.mapping.pairs.top;
-		     p++) {
-			if (yaml_scalar_is(yaml_document_get_node(map.doc, p->key), key)) {
-				out.y = yaml_document_get_node(map.doc, p->value);
-				break;
-			}
-		}
-	}
+	if (map.y)
+		out.y = mvod_cvyaml_child(map.doc, map.y, key);
 	for (xmlNode *c = map.x ? map.x->children : NULL; c && !out.x; c = c->next)
 		if (c->type == XML_ELEMENT_NODE && xmlStrEqual(c->name, BAD_CAST key))
 			out.x = c;
@@ -123,75 +103,44 @@ static bool read_int(struct fs_node n, long lo, long hi, int *out)
 	return ok;
 }
 
-/* YAML's spellings of infinity and NaN, which strtod does not know. */
-static bool yaml_nonfinite(const char *s)
+/* OpenCV XML's data: text of numbers between whitespace. */
+static int xml_numbers(struct fs_node data, struct mvod_cvyaml_numbers *m)
 {
-	s += *s == '-' || *s == '+';
-	return strcasecmp(s, ".inf") == 0 || strcasecmp(s, ".nan") == 0;
-}
-
-/* One entry of len bytes at s (NUL-terminated there), or NULL for one that is no scalar. */
-static void take_number(struct fs_numbers *m, const char *s, size_t len)
-{
-	char *end = (char *)s;
-	double v = s ? strtod(s, &end) : 0;
-	bool number = end != s && end == s + len;
-	if ((!number || !isfinite(v)) && m->bad == SIZE_MAX) {
-		m->bad = m->count;
-		m->bad_is_number = number || (s && yaml_nonfinite(s));
-	}
-	if (m->count < MVOD_MAX_DIST)
-		m->v[m->count] = v;
-	m->count++;
-}
-
-/* data: a YAML sequence of plain scalars, or XML text of numbers between whitespace. */
-static int read_numbers(struct fs_node data, struct fs_numbers *m)
-{
-	*m = (struct fs_numbers){.bad = SIZE_MAX};
-	if (data.y) {
-		if (data.y->type != YAML_SEQUENCE_NODE)
-			return -EINVAL;
-		for (yaml_node_item_t *i = data.y->data.sequence.items.start; i < data.y->data.sequence.items.top;
-		     i++) {
-			const yaml_node_t *v = yaml_document_get_node(data.doc, *i);
-			bool plain = v && v->type == YAML_SCALAR_NODE && v->data.scalar.style == YAML_PLAIN_SCALAR_STYLE;
-			take_number(m, plain ? (const char *)v->data.scalar.value : NULL,
-				    plain ? v->data.scalar.length : 0);
-		}
-		return 0;
-	}
 	bool plain;
 	char *text = scalar(data, &plain), *save = NULL;
+	*m = mvod_cvyaml_numbers_into(m->v, m->cap);
 	if (!text)
 		return -EINVAL;
 	for (char *t = strtok_r(text, " \t\r\n", &save); t; t = strtok_r(NULL, " \t\r\n", &save))
-		take_number(m, t, strlen(t));
+		mvod_cvyaml_take(m, t, strlen(t));
 	xmlFree(text);
 	return 0;
 }
 
-/*
- * A matrix: rows, cols and rows*cols finite numbers in data. OpenCV's !!opencv-matrix, its XML
- * twin and ROS's plain maps all have this shape. Nothing is sized from rows and cols, so a
- * file that claims a billion entries costs no more than its text.
- */
-static int read_matrix(struct fs_node node, const char *key, int *rows, int *cols, struct fs_numbers *m,
-		       char *err, size_t errlen)
+/* OpenCV XML's matrix: the YAML one's elements, rows, cols and data. */
+static int xml_matrix(struct fs_node node, int *rows, int *cols, struct mvod_cvyaml_numbers *m,
+		      char *why, size_t whylen)
 {
+	if (!is_map(node) || !read_int(child(node, "rows"), INT_MIN, INT_MAX, rows) ||
+	    !read_int(child(node, "cols"), INT_MIN, INT_MAX, cols) || xml_numbers(child(node, "data"), m))
+		return mvod_errf(why, whylen, -EINVAL, "must be a matrix with rows, cols and data");
+	return mvod_cvyaml_matrix_check(*rows, *cols, m, why, whylen);
+}
+
+/*
+ * A matrix: rows, cols and rows*cols finite numbers in data, the first MVOD_MAX_DIST of them in
+ * m. OpenCV's !!opencv-matrix, its XML twin and ROS's plain maps all have this shape.
+ */
+static int read_matrix(struct fs_node node, const char *key, int *rows, int *cols,
+		       struct mvod_cvyaml_numbers *m, char *err, size_t errlen)
+{
+	char why[128];
+	size_t line;
 	if (!present(node))
 		return mvod_errf(err, errlen, -EINVAL, "no \"%s\" key", key);
-	if (!is_map(node) || !read_int(child(node, "rows"), INT_MIN, INT_MAX, rows) ||
-	    !read_int(child(node, "cols"), INT_MIN, INT_MAX, cols) || read_numbers(child(node, "data"), m))
-		return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be a matrix with rows, cols and data",
-				 key);
-	if (*rows < 0 || *cols < 0 || (uint64_t)*rows * (uint64_t)*cols != m->count)
-		return mvod_errf(err, errlen, -EINVAL, "\"%s\": data holds %zu numbers, not rows x cols = %d x %d",
-				 key, m->count, *rows, *cols);
-	if (m->bad != SIZE_MAX)
-		return mvod_errf(err, errlen, -EINVAL, "\"%s\": entry %zu is not %s", key, m->bad,
-				 m->bad_is_number ? "finite" : "a number");
-	return 0;
+	int ret = node.y ? mvod_cvyaml_matrix(node.doc, node.y, rows, cols, m, &line, why, sizeof(why))
+			 : xml_matrix(node, rows, cols, m, why, sizeof(why));
+	return ret ? mvod_errf(err, errlen, ret, "\"%s\": %s", key, why) : 0;
 }
 
 static int read_size(struct fs_node root, const char *key, int *out, char *err, size_t errlen)
@@ -215,7 +164,7 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 		{"plumb_bob", MVOD_CAM_PINHOLE_RADTAN},  {"rational_polynomial", MVOD_CAM_PINHOLE_RADTAN},
 		{"radtan", MVOD_CAM_PINHOLE_RADTAN},     {"pinhole-radtan", MVOD_CAM_PINHOLE_RADTAN},
 		{"equidistant", MVOD_CAM_FISHEYE_KB4},   {"fisheye", MVOD_CAM_FISHEYE_KB4},
-		{"fisheye-kb4", MVOD_CAM_FISHEYE_KB4},
+		{"fisheye-kb4", MVOD_CAM_FISHEYE_KB4},   {"fov", MVOD_CAM_FOV},
 	};
 	bool plain;
 	char *name = scalar(n, &plain);
@@ -226,7 +175,8 @@ static int read_model(struct fs_node root, enum mvod_cam_model *model, char *err
 	xmlFree(name);
 	if (!known)
 		return mvod_errf(err, errlen, -EINVAL,
-				 "\"distortion_model\" must be plumb_bob, rational_polynomial, equidistant or fisheye");
+				 "\"distortion_model\" must be plumb_bob, rational_polynomial, equidistant, "
+				 "fisheye or fov");
 	*model = names[i].model;
 	return 0;
 }
@@ -284,7 +234,8 @@ static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, si
 	const bool stereo = !present(k) && present(k = child(root, "M1"));
 	const char *kkey = stereo ? "M1" : "camera_matrix", *dkey = stereo ? "D1" : "distortion_coefficients";
 	int rows, cols, ret;
-	struct fs_numbers m;
+	double v[MVOD_MAX_DIST];
+	struct mvod_cvyaml_numbers m = mvod_cvyaml_numbers_into(v, MVOD_MAX_DIST);
 	if ((ret = read_size(root, "image_width", &c->width, err, errlen)) ||
 	    (ret = read_size(root, "image_height", &c->height, err, errlen)) ||
 	    (ret = read_model(root, &c->model, err, errlen)))
@@ -292,10 +243,11 @@ static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, si
 	if (!present(k))
 		return mvod_errf(err, errlen, -EINVAL,
 				 "unknown calibration format: no \"camera_matrix\" key, so not OpenCV or ROS "
-				 "YAML (mvod also reads mvod JSON, [K, dist] JSON and KITTI calib.txt)");
+				 "YAML (mvod also reads mvod JSON, [K, dist] JSON, KITTI calib.txt and DSO "
+				 "camera.txt)");
 	if ((ret = read_matrix(k, kkey, &rows, &cols, &m, err, errlen)))
 		return ret;
-	if (rows != 3 || cols != 3 || mvod_calib_set_K(m.v, c) != 0)
+	if (rows != 3 || cols != 3 || mvod_calib_set_K(v, c) != 0)
 		return mvod_errf(err, errlen, -EINVAL,
 				 "\"%s\" must be 3x3 [fx 0 cx; 0 fy cy; 0 0 1] with fx, fy > 0", kkey);
 	if ((ret = read_matrix(child(root, dkey), dkey, &rows, &cols, &m, err, errlen)))
@@ -305,56 +257,18 @@ static int read_camera(struct fs_node root, struct mvod_camera *c, char *err, si
 		return mvod_errf(err, errlen, -EINVAL, "\"%s\" must be 1xN or Nx1 with N = %s for %s (not %dx%d)",
 				 dkey, mvod_calib_dist_counts(c->model), mvod_cam_model_name(c->model), rows, cols);
 	c->n_dist = (int)m.count;
-	memcpy(c->dist, m.v, sizeof(double) * m.count);
+	memcpy(c->dist, v, sizeof(double) * m.count);
 	return read_mount(root, c, err, errlen);
 }
 
-static int yaml_error(const yaml_parser_t *p, char *err, size_t errlen)
+/* The text's first YAML document (util/cvyaml.c), its syntax error worded as calib's. */
+static int load_yaml(const char *text, yaml_document_t *doc, char *err, size_t errlen)
 {
-	if (p->error == YAML_MEMORY_ERROR)
-		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading the YAML");
-	/* The reader (bad UTF-8, say) marks no line, only the byte. */
-	if (p->error == YAML_READER_ERROR)
-		return mvod_errf(err, errlen, -EINVAL, UNKNOWN_FORMAT " (YAML error at byte %zu: %s)",
-				 p->problem_offset, p->problem ? p->problem : "?");
-	return mvod_errf(err, errlen, -EINVAL, UNKNOWN_FORMAT " (YAML error at line %zu: %s)",
-			 p->problem_mark.line + 1, p->problem ? p->problem : "?");
-}
-
-/*
- * The first document of the text into doc. Later documents are parsed, so that a syntax error
- * anywhere is one (as it is for OpenCV), but not read (nor are they by OpenCV).
- */
-static int load_yaml(const char *text, size_t opencv_header_at, yaml_document_t *doc, char *err,
-		     size_t errlen)
-{
-	char *copy = strdup(text);
-	yaml_parser_t parser;
-	if (!copy || !yaml_parser_initialize(&parser)) {
-		free(copy);
-		return mvod_errf(err, errlen, -ENOMEM, "out of memory reading the YAML");
-	}
-	/* OpenCV's "%YAML:1.0" is no YAML directive: as a comment, line numbers stay right. */
-	if (opencv_header_at != SIZE_MAX)
-		copy[opencv_header_at] = '#';
-	size_t len = strlen(copy);
-	yaml_parser_set_input_string(&parser, (const unsigned char *)copy, len);
-	int ret = mvod_text_guard(copy, len, MVOD_TEXT_YAML, err, errlen);
-	if (!ret && !yaml_parser_load(&parser, doc))
-		ret = yaml_error(&parser, err, errlen);
-	for (bool more = ret == 0 && yaml_document_get_root_node(doc); more && ret == 0;) {
-		yaml_document_t next;
-		if (!yaml_parser_load(&parser, &next)) {
-			ret = yaml_error(&parser, err, errlen);
-			yaml_document_delete(doc);
-			break;
-		}
-		more = yaml_document_get_root_node(&next) != NULL;
-		yaml_document_delete(&next);
-	}
-	yaml_parser_delete(&parser);
-	free(copy);
-	return ret;
+	char why[256];
+	int ret = mvod_cvyaml_load(text, doc, why, sizeof(why));
+	if (ret == -EINVAL)
+		return mvod_errf(err, errlen, ret, UNKNOWN_FORMAT " (%s)", why);
+	return ret ? mvod_errf(err, errlen, ret, "%s", why) : 0;
 }
 
 /*
@@ -393,7 +307,7 @@ int mvod_calib_parse_filestorage(const char *text, struct mvod_camera *cam, enum
 	yaml_document_t ydoc;
 	xmlDoc *xdoc = NULL;
 	int ret = xml ? load_xml(p, &xdoc, err, errlen)
-		      : load_yaml(text, opencv_yaml ? (size_t)(p - text) : SIZE_MAX, &ydoc, err, errlen);
+		      : load_yaml(text, &ydoc, err, errlen);
 	if (ret)
 		return ret;
 	struct fs_node root = {.doc = xml ? NULL : &ydoc};
@@ -619,8 +533,7 @@ int mvod_calib_filestorage_set_mount(const char *text, const double mount[3], ch
 		return read_back(&before, mount, out, err, errlen);
 	}
 	yaml_document_t doc;
-	size_t header_at = strncmp(p, "%YAML:", 6) == 0 ? (size_t)(p - text) : SIZE_MAX;
-	if ((ret = load_yaml(text, header_at, &doc, err, errlen)))
+	if ((ret = load_yaml(text, &doc, err, errlen)))
 		return ret;
 	struct fs_edit e[4];
 	int n = 0;

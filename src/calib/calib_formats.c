@@ -1,4 +1,7 @@
-/* Calibration formats by name, and the plain-text writers: ROS camera_info YAML, KITTI calib.txt. */
+/*
+ * Calibration formats by name, and the plain-text writers: ROS camera_info YAML, KITTI
+ * calib.txt, DSO's camera.txt.
+ */
 #include "mvod/calib.h"
 
 #include <errno.h>
@@ -18,6 +21,7 @@ static const struct {
 	[MVOD_CALIB_FMT_ROS] = {"ros", "ROS camera_info YAML"},
 	[MVOD_CALIB_FMT_KITTI] = {"kitti", "KITTI calib.txt"},
 	[MVOD_CALIB_FMT_PAIR] = {"pair", "JSON [K, dist] pair"},
+	[MVOD_CALIB_FMT_DSO] = {"dso", "DSO camera.txt"},
 };
 #define N_FORMATS ((int)(sizeof(formats) / sizeof(formats[0])))
 
@@ -80,11 +84,25 @@ static void projection(const struct mvod_camera *cam, double P[12])
 	}
 }
 
-/* Text built in a memory stream (buf and len are valid once f is closed), then written whole. */
-static int write_stream(const char *path, char **buf, size_t *len, FILE *f, char *err, size_t errlen)
+/* Text built in a memory stream, then written whole (write_text). */
+struct text {
+	char *buf;
+	size_t len;
+	FILE *f;
+};
+
+static int open_text(struct text *t, const char *path, char *err, size_t errlen)
 {
-	int ret = fclose(f) == 0 ? mvod_write_replace(path, *buf, *len) : -ENOMEM;
-	free(*buf);
+	*t = (struct text){0};
+	t->f = open_memstream(&t->buf, &t->len);
+	return t->f ? 0 : mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
+}
+
+/* buf and len are valid once f is closed; the text is freed in any case. */
+static int write_text(const char *path, struct text *t, char *err, size_t errlen)
+{
+	int ret = fclose(t->f) == 0 ? mvod_write_replace(path, t->buf, t->len) : -ENOMEM;
+	free(t->buf);
 	if (ret)
 		mvod_errf(err, errlen, ret, "cannot write %s: %s", path, strerror(-ret));
 	return ret;
@@ -97,6 +115,8 @@ static int write_stream(const char *path, char **buf, size_t *len, FILE *f, char
  */
 static int ros_distortion(const struct mvod_camera *cam, const char **model, int *n)
 {
+	if (cam->model == MVOD_CAM_FOV)
+		return -ENOTSUP;
 	if (cam->model == MVOD_CAM_FISHEYE_KB4) {
 		*model = "equidistant";
 		*n = 4;
@@ -117,15 +137,19 @@ int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *e
 	if (cam->width <= 0 || cam->height <= 0)
 		return mvod_errf(err, errlen, -EINVAL,
 			    "%s: ROS camera_info needs the image size, which the calibration lacks", path);
-	if (ros_distortion(cam, &model, &n))
+	int ret = ros_distortion(cam, &model, &n);
+	if (ret == -ENOTSUP)
+		return mvod_errf(err, errlen, -EINVAL, "%s: ROS camera_info has no FOV lens model "
+				 "(image_geometry knows plumb_bob, rational_polynomial and "
+				 "equidistant): write mvod JSON, OpenCV YAML or DSO's camera.txt", path);
+	if (ret)
 		return mvod_errf(err, errlen, -EINVAL,
 			    "%s: ROS camera_info has no model for non-zero thin-prism or tilt "
 			    "coefficients (the 9th and later)", path);
-	char *buf = NULL;
-	size_t len = 0;
-	FILE *f = open_memstream(&buf, &len);
-	if (!f)
-		return mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
+	struct text t;
+	if ((ret = open_text(&t, path, err, errlen)))
+		return ret;
+	FILE *f = t.f;
 	double dist[MVOD_MAX_DIST] = {0};
 	memcpy(dist, cam->dist, sizeof(double) * (size_t)cam->n_dist);
 	double K[9];
@@ -148,7 +172,7 @@ int mvod_calib_save_ros(const char *path, const struct mvod_camera *cam, char *e
 			fputc('\n', f);
 		}
 	}
-	return write_stream(path, &buf, &len, f, err, errlen);
+	return write_text(path, &t, err, errlen);
 }
 
 int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char *err, size_t errlen)
@@ -157,11 +181,11 @@ int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char 
 		return mvod_errf(err, errlen, -EINVAL,
 			    "%s: KITTI calib.txt holds rectified (distortion-free) intrinsics only, and "
 			    "this camera has %s distortion", path, mvod_cam_model_name(cam->model));
-	char *buf = NULL;
-	size_t len = 0;
-	FILE *f = open_memstream(&buf, &len);
-	if (!f)
-		return mvod_errf(err, errlen, -ENOMEM, "cannot write %s: out of memory", path);
+	struct text t;
+	int ret = open_text(&t, path, err, errlen);
+	if (ret)
+		return ret;
+	FILE *f = t.f;
 	/* One camera: every P is the same [K | 0], for readers that expect all four lines. */
 	double P[12];
 	projection(cam, P);
@@ -170,5 +194,48 @@ int mvod_calib_save_kitti(const char *path, const struct mvod_camera *cam, char 
 		put_numbers(f, P, 12, " ");
 		fputc('\n', f);
 	}
-	return write_stream(path, &buf, &len, f, err, errlen);
+	return write_text(path, &t, err, errlen);
+}
+
+/* camera.txt's first line's name and how many coefficients follow fx fy cx cy; -EINVAL. */
+static int dso_lens(const struct mvod_camera *cam, const char **name, int *n)
+{
+	for (int i = 4; cam->model == MVOD_CAM_PINHOLE_RADTAN && i < cam->n_dist; i++)
+		if (cam->dist[i] != 0)
+			return -EINVAL;
+	static const char *const names[] = {[MVOD_CAM_PINHOLE_RADTAN] = "RadTan",
+					    [MVOD_CAM_FISHEYE_KB4] = "KannalaBrandt",
+					    [MVOD_CAM_FOV] = "FOV"};
+	*name = mvod_camera_has_distortion(cam) ? names[cam->model] : "Pinhole";
+	*n = !mvod_camera_has_distortion(cam) || cam->model == MVOD_CAM_FOV ? 1 : 4;
+	return 0;
+}
+
+int mvod_calib_save_dso(const char *path, const struct mvod_camera *cam, char *err, size_t errlen)
+{
+	const char *name;
+	int n;
+	if (cam->width <= 0 || cam->height <= 0)
+		return mvod_errf(err, errlen, -EINVAL, "%s: DSO's camera.txt needs the image size, "
+				 "which the calibration lacks", path);
+	/* In pixels DSO takes K as it is; within [0, 1) it would read cx, cy as fractions. */
+	if (cam->cx >= 0 && cam->cx < 1 && cam->cy >= 0 && cam->cy < 1)
+		return mvod_errf(err, errlen, -EINVAL, "%s: a principal point at (%g, %g) px would "
+				 "read as DSO's relative form", path, cam->cx, cam->cy);
+	if (dso_lens(cam, &name, &n))
+		return mvod_errf(err, errlen, -EINVAL, "%s: DSO's RadTan lens has 4 coefficients "
+				 "(k1 k2 p1 p2); this camera has more", path);
+	struct text t;
+	int ret = open_text(&t, path, err, errlen);
+	if (ret)
+		return ret;
+	FILE *f = t.f;
+	double v[8] = {cam->fx, cam->fy, cam->cx, cam->cy};
+	memcpy(v + 4, cam->dist, sizeof(double) * (size_t)(n < cam->n_dist ? n : cam->n_dist));
+	fprintf(f, "%s ", name);
+	put_numbers(f, v, 4 + n, " ");
+	/* DSO rectifies a lens into its largest whole view ("crop"); a pinhole passes ("none"). */
+	fprintf(f, "\n%d %d\n%s\n%d %d\n", cam->width, cam->height,
+		mvod_camera_has_distortion(cam) ? "crop" : "none", cam->width, cam->height);
+	return write_text(path, &t, err, errlen);
 }

@@ -39,8 +39,11 @@ extern "C" int mvod_calib_save_opencv(const char *path, const struct mvod_camera
 		/* No coefficients is written as OpenCV's usual five zeros. */
 		write_matrix(fs, "distortion_coefficients", 1, cam->n_dist ? cam->n_dist : 5,
 			     cam->n_dist ? cam->dist : zero);
+		/* OpenCV's own files cannot name a model: mvod's key says which, as ROS's does. */
 		if (cam->model == MVOD_CAM_FISHEYE_KB4)
 			fs << "distortion_model" << "fisheye";
+		else if (cam->model == MVOD_CAM_FOV)
+			fs << "distortion_model" << "fov";
 		/* Flat scalars, as calib_filestorage.c reads them and mvod mount writes them. */
 		if (cam->has_mount) {
 			fs << "mount_height_m" << cam->mount_height_m;

@@ -35,6 +35,9 @@ bool mvod_calib_dist_count_ok(enum mvod_cam_model model, int n);
 /* The same, as words for a message. */
 const char *mvod_calib_dist_counts(enum mvod_cam_model model);
 
+/* Whether text's first line is a lens line of DSO's camera.txt (calib_dso.c). */
+bool mvod_calib_is_dso(const char *text);
+
 #ifdef __cplusplus
 }
 #endif

@@ -98,7 +98,7 @@ static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, si
 	const cJSON *model = cJSON_GetObjectItemCaseSensitive(root, "model");
 	if (!cJSON_IsString(model) || mvod_cam_model_parse(model->valuestring, &c.model) != 0) {
 		ret = mvod_errf(err, errlen, -EINVAL,
-			   "\"model\" must be \"pinhole-radtan\" or \"fisheye-kb4\"");
+			   "\"model\" must be \"pinhole-radtan\", \"fisheye-kb4\" or \"fov\"");
 		goto out;
 	}
 	double size[2];
@@ -188,7 +188,7 @@ static int json_pair_camera(const cJSON *root, struct mvod_camera *cam, char *er
 			   "expected [K, dist] or {\"K\": K, \"dist\": dist} (or mvod JSON with \"format\")");
 	} else if (!array && json_pair_model(root, &c) != 0) {
 		ret = mvod_errf(err, errlen, -EINVAL,
-			   "\"model\" must be \"pinhole-radtan\" or \"fisheye-kb4\"");
+			   "\"model\" must be \"pinhole-radtan\", \"fisheye-kb4\" or \"fov\"");
 	} else if (json_K(array ? cJSON_GetArrayItem(root, 0) : cJSON_GetObjectItemCaseSensitive(root, "K"),
 			  &c) != 0) {
 		ret = mvod_errf(err, errlen, -EINVAL,
@@ -258,9 +258,33 @@ static int kitti_camera(const char *text, struct mvod_camera *cam, char *err, si
 	return 0;
 }
 
-/* Read once, parsed once by the reader the content asks for; a failure names the file. */
-static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam, enum mvod_calib_format *fmt,
-		     char *err, size_t errlen)
+/* The format text is in, by its content; DSO's names the file and line itself. */
+static int parse_any(const char *text, const char *path, const enum mvod_calib_format *only,
+		     struct mvod_camera *cam, enum mvod_calib_format *fmt, char *err, size_t errlen)
+{
+	const char *p = text + strspn(text, " \t\r\n");
+	const bool json = *p == '{' || *p == '[';
+	char why[256] = "";
+	int ret;
+	*fmt = only ? *only : MVOD_CALIB_FMT_KITTI;
+	if (*p && (only ? *only == MVOD_CALIB_FMT_DSO : mvod_calib_is_dso(text))) {
+		*fmt = MVOD_CALIB_FMT_DSO;
+		return mvod_calib_parse_dso(text, path, cam, err, errlen);
+	}
+	if (!*p)
+		ret = mvod_errf(why, sizeof(why), -EINVAL, "the file is empty");
+	else if (only || (!json && strstr(text, "P0:")))
+		ret = kitti_camera(text, cam, why, sizeof(why));
+	else if (json)
+		ret = json_any_camera(p, cam, fmt, why, sizeof(why));
+	else
+		ret = mvod_calib_parse_filestorage(text, cam, fmt, why, sizeof(why));
+	return ret ? mvod_errf(err, errlen, ret, "%s: %s", path, why) : 0;
+}
+
+/* Read once, parsed once by the reader the content (or only, when not NULL) asks for. */
+static int load_text(const char *path, const enum mvod_calib_format *only,
+		     struct mvod_camera *cam, enum mvod_calib_format *fmt, char *err, size_t errlen)
 {
 	char *text = NULL;
 	int ret = mvod_read_file(path, CALIB_MAX_BYTES, "calibration file", MVOD_INPUT_STREAM,
@@ -269,35 +293,30 @@ static int load_text(const char *path, bool kitti_only, struct mvod_camera *cam,
 		return ret;
 	/* A UTF-8 byte order mark (Windows editors write one) is no part of the text. */
 	const char *body = strncmp(text, "\xEF\xBB\xBF", 3) == 0 ? text + 3 : text;
-	const char *p = body + strspn(body, " \t\r\n");
-	enum mvod_calib_format f = MVOD_CALIB_FMT_KITTI;
-	char why[256] = "";
-	const bool json = *p == '{' || *p == '[';
-	if (!*p)
-		ret = mvod_errf(why, sizeof(why), -EINVAL, "the file is empty");
-	else if (kitti_only || (!json && strstr(body, "P0:")))
-		ret = kitti_camera(body, cam, why, sizeof(why));
-	else if (json)
-		ret = json_any_camera(p, cam, &f, why, sizeof(why));
-	else
-		ret = mvod_calib_parse_filestorage(body, cam, &f, why, sizeof(why));
+	enum mvod_calib_format f;
+	ret = parse_any(body, path, only, cam, &f, err, errlen);
 	free(text);
-	if (ret)
-		return mvod_errf(err, errlen, ret, "%s: %s", path, why);
-	if (fmt)
+	if (!ret && fmt)
 		*fmt = f;
-	return 0;
+	return ret;
 }
 
 int mvod_calib_load_kitti(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
 {
-	return load_text(path, true, cam, NULL, err, errlen);
+	const enum mvod_calib_format kitti = MVOD_CALIB_FMT_KITTI;
+	return load_text(path, &kitti, cam, NULL, err, errlen);
+}
+
+int mvod_calib_load_dso(const char *path, struct mvod_camera *cam, char *err, size_t errlen)
+{
+	const enum mvod_calib_format dso = MVOD_CALIB_FMT_DSO;
+	return load_text(path, &dso, cam, NULL, err, errlen);
 }
 
 int mvod_calib_load_format(const char *path, struct mvod_camera *cam, enum mvod_calib_format *fmt,
 			   char *err, size_t errlen)
 {
-	return load_text(path, false, cam, fmt, err, errlen);
+	return load_text(path, NULL, cam, fmt, err, errlen);
 }
 
 int mvod_calib_load(const char *path, struct mvod_camera *cam, char *err, size_t errlen)

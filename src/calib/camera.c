@@ -10,16 +10,17 @@
 
 #include "calib/calib_internal.h"
 
-static const char *const model_names[] = {"pinhole-radtan", "fisheye-kb4"};
+static const char *const model_names[] = {"pinhole-radtan", "fisheye-kb4", "fov"};
+#define N_MODELS ((int)(sizeof(model_names) / sizeof(model_names[0])))
 
 const char *mvod_cam_model_name(enum mvod_cam_model model)
 {
-	return (unsigned)model < 2 ? model_names[model] : "unknown";
+	return (unsigned)model < N_MODELS ? model_names[model] : "unknown";
 }
 
 int mvod_cam_model_parse(const char *name, enum mvod_cam_model *out)
 {
-	for (int i = 0; i < 2; i++) {
+	for (int i = 0; i < N_MODELS; i++) {
 		if (strcmp(name, model_names[i]) == 0) {
 			*out = (enum mvod_cam_model)i;
 			return 0;
@@ -66,10 +67,14 @@ bool mvod_calib_dist_count_ok(enum mvod_cam_model model, int n)
 {
 	if (model == MVOD_CAM_FISHEYE_KB4)
 		return n == 4;
+	if (model == MVOD_CAM_FOV)
+		return n == 1;
 	return n == 0 || n == 4 || n == 5 || n == 8 || n == 12 || n == 14;
 }
 
 const char *mvod_calib_dist_counts(enum mvod_cam_model model)
 {
+	if (model == MVOD_CAM_FOV)
+		return "1 (w, radians)";
 	return model == MVOD_CAM_FISHEYE_KB4 ? "4" : "0, 4, 5, 8, 12 or 14";
 }

@@ -238,6 +238,11 @@ int mvod_mount_measure(const struct mvod_mount_opts *o, const struct mvod_camera
 		       struct mvod_mount_result *res, char *err, size_t errlen)
 {
 	memset(res, 0, sizeof(*res));
+	/* The board's pose undistorts its corners through OpenCV, which has no FOV lens. */
+	if (cam->model == MVOD_CAM_FOV && mvod_camera_has_distortion(cam))
+		return mvod_errf(err, errlen, -ENOTSUP, "the camera file's lens is FOV, which mvod "
+				 "mount cannot undistort (OpenCV has no model for it): measure with "
+				 "a pinhole or fisheye calibration of the camera (mvod calibrate)");
 	struct mvod_calib_opts co;
 	mvod_calib_opts_default(&co);
 	co.source = o->source;

@@ -10,6 +10,7 @@
 extern const struct mvod_source_ops mvod_source_file_ops;
 extern const struct mvod_source_ops mvod_source_images_ops;
 extern const struct mvod_source_ops mvod_source_kitti_ops;
+extern const struct mvod_source_ops mvod_source_kitti_raw_ops;
 extern const struct mvod_source_ops mvod_source_euroc_ops;
 extern const struct mvod_source_ops mvod_source_tum_ops;
 extern const struct mvod_source_ops mvod_source_v4l2_ops;

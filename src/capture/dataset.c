@@ -37,27 +37,74 @@ int mvod_ds_parse_ns(const char *s, const char **end, int64_t *ns)
 	return parse_digits(s, 19, end, ns) > 0 ? 0 : -EINVAL;
 }
 
+/* Digits after a decimal point at *s, if there is one, as nanoseconds: the first 9 kept. */
+static int64_t fraction_ns(const char **s)
+{
+	int64_t frac = 0;
+	int frac_digits = 0;
+	if (**s != '.')
+		return 0;
+	const char *f = *s + 1;
+	for (; *f >= '0' && *f <= '9'; f++) {
+		if (frac_digits == 9)
+			continue; /* below a nanosecond: dropped */
+		frac = 10 * frac + (*f - '0');
+		frac_digits++;
+	}
+	*s = f;
+	for (int k = frac_digits; k < 9; k++)
+		frac *= 10;
+	return frac;
+}
+
 int mvod_ds_parse_seconds(const char *s, const char **end, int64_t *ns)
 {
 	s += strspn(s, " \t");
-	int64_t sec, frac = 0;
+	int64_t sec;
 	/* Int64 nanoseconds end in the year 2262, a second after INT64_MAX / 1e9 s. */
 	if (parse_digits(s, 10, end, &sec) <= 0 || sec >= INT64_MAX / 1000000000)
 		return -EINVAL;
-	int frac_digits = 0;
-	if (**end == '.') {
-		const char *f = *end + 1;
-		for (; *f >= '0' && *f <= '9'; f++) {
-			if (frac_digits == 9)
-				continue; /* below a nanosecond: dropped */
-			frac = 10 * frac + (*f - '0');
-			frac_digits++;
-		}
-		*end = f;
+	*ns = sec * 1000000000 + fraction_ns(end);
+	return 0;
+}
+
+/* Days from 1970-01-01 to y-m-d in the proleptic Gregorian calendar (eras of 400 years). */
+static int64_t days_from_civil(int64_t y, int64_t m, int64_t d)
+{
+	y -= m <= 2;
+	const int64_t era = y / 400, yoe = y - era * 400;         /* y >= 0 here: 1970..2261 */
+	const int64_t doy = (153 * (m + (m > 2 ? -3 : 9)) + 2) / 5 + d - 1; /* from March 1st */
+	const int64_t doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+	return era * 146097 + doe - 719468;
+}
+
+static bool leap(int64_t y)
+{
+	return (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+}
+
+int mvod_ds_parse_calendar(const char *s, const char **end, int64_t *ns)
+{
+	/* YYYY-MM-DD HH:MM:SS: each field's digits, then what must follow it. */
+	static const struct {
+		int digits;
+		char after;
+		int64_t lo, hi;
+	} f[6] = {{4, '-', 1970, 2261}, {2, '-', 1, 12}, {2, ' ', 1, 31},
+		  {2, ':', 0, 23},      {2, ':', 0, 59}, {2, 0, 0, 59}};
+	static const int mdays[12] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+	int64_t v[6];
+	s += strspn(s, " \t");
+	for (int i = 0; i < 6; i++) {
+		if (parse_digits(s, f[i].digits, &s, &v[i]) != f[i].digits || v[i] < f[i].lo ||
+		    v[i] > f[i].hi || (f[i].after && *s++ != f[i].after))
+			return -EINVAL;
 	}
-	for (int k = frac_digits; k < 9; k++)
-		frac *= 10;
-	*ns = sec * 1000000000 + frac;
+	if (v[2] > mdays[v[1] - 1] + (v[1] == 2 && leap(v[0])))
+		return -EINVAL;
+	int64_t sec = days_from_civil(v[0], v[1], v[2]) * 86400 + v[3] * 3600 + v[4] * 60 + v[5];
+	*ns = sec * 1000000000 + fraction_ns(&s);
+	*end = s;
 	return 0;
 }
 

@@ -43,6 +43,13 @@ struct mvod_dataset {
  */
 int mvod_ds_parse_ns(const char *s, const char **end, int64_t *ns);
 int mvod_ds_parse_seconds(const char *s, const char **end, int64_t *ns);
+/*
+ * KITTI raw's calendar time "2011-09-26 13:02:25.964389445" (the digits as shown, the date
+ * 1970-01-01 .. 2261-12-31, a real day of its month, no leap second, the decimals optional and
+ * those past nine dropped) into nanoseconds since 1970 as if it were UTC: the clock is only
+ * compared with itself. -EINVAL for anything else.
+ */
+int mvod_ds_parse_calendar(const char *s, const char **end, int64_t *ns);
 
 /*
  * The 7 numbers of a pose after a line's time: "tx ty tz" in metres, then a unit quaternion,

@@ -58,17 +58,24 @@ struct index {
 	char data[PATH_MAX]; /* camN/data */
 };
 
-/* "1403636579763555584,1403636579763555584.png" */
+/*
+ * "1403636579763555584,1403636579763555584.png", the published files' lines ending in CRLF
+ * (cut by the line reader); empty fields after the name (a trailing comma) are no column.
+ */
 static int add_frame(void *ctx, char *line, size_t lineno, char *err, size_t errlen)
 {
 	struct index *x = ctx;
 	const char *end;
 	int64_t ns;
-	if (mvod_ds_parse_ns(line, &end, &ns) < 0 || *(end += strspn(end, " \t")) != ',')
+	char *name = NULL, *rest = NULL;
+	if (mvod_ds_parse_ns(line, &end, &ns) == 0 && *(end += strspn(end, " \t")) == ',') {
+		name = (char *)end + 1 + strspn(end + 1, " \t");
+		rest = name + strcspn(name, " \t,");
+	}
+	if (!name || rest[strspn(rest, " \t,")])
 		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: \"%.40s\" is not \"timestamp "
 				 "[ns],filename\"", x->path, lineno, line);
-	char *name = (char *)end + 1 + strspn(end + 1, " \t");
-	name[strcspn(name, " \t")] = '\0';
+	*rest = '\0';
 	if (!*name)
 		return mvod_errf(err, errlen, -EINVAL, "%s line %zu: no file name after the "
 				 "timestamp", x->path, lineno);

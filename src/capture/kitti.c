@@ -49,6 +49,13 @@ static int kitti_open(void *priv, const char *seqdir, char *err, size_t errlen)
 		ret = mvod_capture_path(image_dir, sizeof(image_dir), seqdir, "image_0", err, errlen);
 	if (!ret)
 		ret = mvod_capture_path(times, sizeof(times), seqdir, "times.txt", err, errlen);
+	/* A raw drive has image_00/ and no calib.txt: it is kitti-raw:'s. */
+	char raw[PATH_MAX];
+	if (!ret && access(calib, F_OK) != 0 &&
+	    mvod_capture_path(raw, sizeof(raw), seqdir, "image_00/timestamps.txt", NULL, 0) == 0 &&
+	    access(raw, F_OK) == 0)
+		return mvod_errf(err, errlen, -EINVAL, "kitti:%s is a KITTI raw drive (image_00/, no "
+				 "calib.txt): open it as kitti-raw:%s", seqdir, seqdir);
 	/* The calibration first: a sequence without one fails before any image is decoded. */
 	if (!ret)
 		ret = mvod_calib_load_kitti(calib, &k->cam, err, errlen);

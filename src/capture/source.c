@@ -16,6 +16,7 @@ const struct mvod_source_ops *const mvod_source_backends[] = {
 	&mvod_source_file_ops,
 	&mvod_source_images_ops,
 	&mvod_source_kitti_ops,
+	&mvod_source_kitti_raw_ops,
 	&mvod_source_euroc_ops,
 	&mvod_source_tum_ops,
 	&mvod_source_v4l2_ops,

@@ -3,7 +3,8 @@
  * the colour images it names, groundtruth.txt (the colour camera's pose, "timestamp tx ty tz
  * qx qy qz qw"); intrinsics from --calib or from the published ones of freiburg1/2/3 when
  * the folder name says which. The monoVO dataset: times.txt ("id timestamp exposure"),
- * images/ID.jpg, camera.txt (its camera model; no ground truth).
+ * images/ID.jpg, camera.txt (DSO's, read by calib/calib_dso.c: FOV, pinhole, RadTan and
+ * Kannala-Brandt lenses; no ground truth).
  */
 #include "capture/backends.h"
 
@@ -20,7 +21,6 @@
 #include "capture/dataset.h"
 #include "mvod/log.h"
 #include "util/lines.h"
-#include "util/read_file.h"
 
 struct tum {
 	struct mvod_dataset ds; /* first, so that the dataset ops work on it as is */
@@ -139,69 +139,11 @@ static int add_mono(void *ctx, char *line, size_t lineno, char *err, size_t errl
 	return mvod_ds_frames_add(&x->frames, x->path, lineno, x->dir, name, ns, err, errlen);
 }
 
-/*
- * DSO's relative calibration (0 <= cx, cy < 1): fractions of the image, pixel edges at 0. A
- * negative principal point is in pixels (outside the image's left or top edge), not a
- * fraction: taken for one, it made "fx = 368640 px" of a 576 px focal length.
- */
-static void from_relative(struct mvod_camera *cam)
-{
-	if (!(cam->cx >= 0 && cam->cx < 1 && cam->cy >= 0 && cam->cy < 1))
-		return;
-	cam->fx *= cam->width;
-	cam->fy *= cam->height;
-	cam->cx = cam->cx * cam->width - 0.5;
-	cam->cy = cam->cy * cam->height - 0.5;
-}
-
-/*
- * camera.txt's first two lines: "MODEL fx fy cx cy params..." and "width height". Pinhole,
- * RadTan (k1 k2 p1 p2) and KannalaBrandt / EquiDistant (k1..k4) map onto mvod's models. The
- * FOV model (DSO's default, also written as 5 bare numbers) does not: r_d = atan(2 r
- * tan(w / 2)) / w is neither OpenCV polynomial, so it is refused, naming it.
- */
-static int parse_camera(const char *text, const char *path, struct mvod_camera *cam, char *err,
-			size_t errlen)
-{
-	char model[32] = "FOV";
-	double v[9];
-	int n = 0, used = 0;
-	if (!(text[0] >= '0' && text[0] <= '9') && sscanf(text, "%31s%n", model, &used) != 1)
-		return mvod_errf(err, errlen, -EINVAL, "%s line 1: no camera model", path);
-	const char *s = text + used;
-	for (char *end; n < 9 && *s != '\n' && *s; s = end, n++) {
-		v[n] = strtod(s, &end);
-		if (end == s)
-			break;
-	}
-	bool pinhole = strcmp(model, "Pinhole") == 0 && n == 5;
-	bool radtan = strcmp(model, "RadTan") == 0 && n == 8;
-	bool kb = (strcmp(model, "KannalaBrandt") == 0 || strcmp(model, "EquiDistant") == 0) &&
-		  n == 8;
-	int w = 0, h = 0;
-	const char *line2 = strchr(text, '\n');
-	if (!pinhole && !radtan && !kb)
-		return mvod_errf(err, errlen, -EINVAL, "%s line 1: camera model \"%s\" with %d "
-				 "numbers is not one mvod reads (Pinhole fx fy cx cy 0, RadTan and "
-				 "KannalaBrandt with 4 coefficients); the FOV model has no equal in "
-				 "mvod's calibration: pass --calib FILE", path, model, n);
-	if (!line2 || sscanf(line2, "%d %d", &w, &h) != 2 || w < 1 || h < 1 || w > 65535 ||
-	    h > 65535 || v[0] <= 0 || v[1] <= 0)
-		return mvod_errf(err, errlen, -EINVAL, "%s line 2: expected the image size "
-				 "\"width height\" (and positive focal lengths on line 1)", path);
-	*cam = (struct mvod_camera){.width = w, .height = h, .fx = v[0], .fy = v[1], .cx = v[2],
-				    .cy = v[3], .n_dist = pinhole ? 0 : 4,
-				    .model = kb ? MVOD_CAM_FISHEYE_KB4 : MVOD_CAM_PINHOLE_RADTAN};
-	memcpy(cam->dist, v + 4, (size_t)cam->n_dist * sizeof(double));
-	from_relative(cam);
-	return 0;
-}
-
 static int open_mono(struct tum *t, char *err, size_t errlen)
 {
 	struct mvod_dataset *ds = &t->ds;
 	struct index x = {.path = ds->index, .dir = t->dir};
-	char path[PATH_MAX], *text = NULL;
+	char path[PATH_MAX];
 	int ret = mvod_capture_path(path, sizeof(path), t->dir, "camera.txt", err, errlen);
 	if (!ret)
 		ret = mvod_lines_each(ds->index, "TUM monoVO times.txt", add_mono, &x, err,
@@ -214,13 +156,7 @@ static int open_mono(struct tum *t, char *err, size_t errlen)
 	 * A camera.txt mvod cannot take is no reason to refuse the frames: --calib may give
 	 * the camera. Why it was not taken is said when the run asks for one.
 	 */
-	/* A camera.txt is 4 short lines; 64 KiB is far past any. */
-	ret = mvod_read_file(path, 65536, "TUM monoVO camera.txt", 0, &text, NULL, t->why,
-			     sizeof(t->why));
-	if (!ret)
-		ret = parse_camera(text, path, &ds->cam, t->why, sizeof(t->why));
-	free(text);
-	ds->has_cam = ret == 0;
+	ds->has_cam = mvod_calib_load_dso(path, &ds->cam, t->why, sizeof(t->why)) == 0;
 	return mvod_ds_open_frames(ds, &x.frames, err, errlen);
 }
 

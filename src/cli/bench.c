@@ -61,7 +61,8 @@ static void usage(FILE *out)
 "KITTI t_rel (%%) and r_rel (deg/100 m) on paths over 100 m, fps, median and 95th\n"
 "percentile frame time and the mean milliseconds of each stage. Every frame needs a\n"
 "ground-truth pose: from --gt FILE, or else from the dataset (kitti: with poses/NN.txt\n"
-"beside sequences/NN, euroc:, tum: RGB-D with groundtruth.txt).\n"
+"beside sequences/NN, kitti-raw: with oxts/data/, euroc:, tum: RGB-D with\n"
+"groundtruth.txt).\n"
 "\n");
 	cli_usage_input(out);
 	cli_usage_vo(out);

@@ -127,14 +127,15 @@ void cli_usage_input(FILE *out)
 			mvod_source_backends[i]->summary);
 	fprintf(out,
 "  --calib FILE          camera calibration: mvod JSON (mvod-calibration/1), OpenCV\n"
-"                        YAML/XML, ROS camera_info, JSON [K, dist] or KITTI calib.txt\n"
-"                        (see mvod calib-convert --help); not needed for kitti: and euroc:\n"
-"                        sources, nor tum: freiburg1/2/3 and monoVO folders\n"
+"                        YAML/XML, ROS camera_info, JSON [K, dist], KITTI calib.txt or DSO\n"
+"                        camera.txt (see mvod calib-convert --help); not needed for kitti:,\n"
+"                        kitti-raw: and euroc: sources, nor tum: freiburg1/2/3 and monoVO\n"
+"                        folders\n"
 "  --gt FILE             ground-truth trajectory, TUM or KITTI (matched by timestamp or\n"
 "                        by index); enables the accuracy summary and the GT path in --plot.\n"
-"                        Default: the dataset's own (kitti: ../../poses/NN.txt, euroc:,\n"
-"                        tum: groundtruth.txt), as camera poses in the first frame's\n"
-"                        camera frame\n"
+"                        Default: the dataset's own (kitti: ../../poses/NN.txt, kitti-raw:\n"
+"                        oxts/data/, euroc:, tum: groundtruth.txt), as camera poses in the\n"
+"                        first frame's camera frame\n"
 "  --max-frames N        stop after N frames (default: the whole source)\n"
 "\n");
 }

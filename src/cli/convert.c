@@ -11,7 +11,7 @@
 static void usage(FILE *out)
 {
 	fprintf(out,
-"Usage: mvod calib-convert IN OUT [--to mvod|opencv|ros|kitti] [--size WxH]\n"
+"Usage: mvod calib-convert IN OUT [--to mvod|opencv|ros|kitti|dso] [--size WxH]\n"
 "Reads the camera calibration IN, prints what it holds, and writes it to OUT.\n"
 "\n"
 "IN may be (recognised by content):\n"
@@ -25,17 +25,22 @@ static void usage(FILE *out)
 "  ROS camera_info YAML  distortion_model plumb_bob, rational_polynomial or equidistant\n"
 "                        (fisheye)\n"
 "  KITTI calib.txt       fx, fy, cx, cy from P0 (no distortion, no image size)\n"
+"  DSO camera.txt        TUM monoVO's and DSO's: FOV fx fy cx cy w (or 5 bare numbers),\n"
+"                        Pinhole, RadTan, EquiDistant or KannalaBrandt; relative or pixels\n"
 "The camera's mount (mvod mount) is carried between mvod JSON (its \"mount\" block),\n"
-"OpenCV and ROS files (mount_height_m, mount_pitch_deg, mount_roll_deg); KITTI drops it.\n"
+"OpenCV and ROS files (mount_height_m, mount_pitch_deg, mount_roll_deg); KITTI and DSO\n"
+"drop it. The FOV lens goes to mvod JSON, OpenCV (distortion_model: fov) and DSO only.\n"
 "\n"
 "Options:\n"
 "  --to FORMAT           mvod (JSON), opencv (YAML, or XML when OUT ends in .xml), ros\n"
-"                        (camera_info YAML) or kitti (calib.txt: P0..P3, distortion-free\n"
-"                        cameras only). Default from OUT's name: .json mvod; .yml, .yaml and\n"
-"                        .xml opencv; .txt kitti. ROS and OpenCV share .yaml, so ROS output\n"
-"                        always needs --to ros.\n"
+"                        (camera_info YAML), kitti (calib.txt: P0..P3, distortion-free\n"
+"                        cameras only) or dso (camera.txt, in pixels). Default from OUT's\n"
+"                        name: .json mvod; .yml, .yaml and .xml opencv; camera.txt dso;\n"
+"                        other .txt kitti. ROS and OpenCV share .yaml, so ROS output always\n"
+"                        needs --to ros.\n"
 "  --size WxH            image size in pixels, for an IN that does not record it (KITTI,\n"
-"                        a [K, dist] pair, OpenCV stereo files); mvod and ros output need one\n"
+"                        a [K, dist] pair, OpenCV stereo files); mvod, ros and dso output\n"
+"                        need one\n"
 "\n");
 	cli_usage_general(out);
 	fprintf(out,
@@ -82,7 +87,7 @@ static int parse_own(int id, const char *arg, void *ctx)
 	case OPT_TO:
 		c->to_given = 1;
 		if (mvod_calib_format_parse(arg, &c->to) || c->to == MVOD_CALIB_FMT_PAIR)
-			return cli_bad_value("to", arg, "mvod, opencv, ros or kitti");
+			return cli_bad_value("to", arg, "mvod, opencv, ros, kitti or dso");
 		return 0;
 	case OPT_SIZE:
 		return parse_size(arg, c);
@@ -96,6 +101,8 @@ static int format_from_name(const char *path, enum mvod_calib_format *fmt)
 		*fmt = MVOD_CALIB_FMT_MVOD;
 	else if (cli_has_suffix(path, ".yml") || cli_has_suffix(path, ".yaml") || cli_has_suffix(path, ".xml"))
 		*fmt = MVOD_CALIB_FMT_OPENCV;
+	else if (cli_has_suffix(path, "/camera.txt") || strcmp(path, "camera.txt") == 0)
+		*fmt = MVOD_CALIB_FMT_DSO;
 	else if (cli_has_suffix(path, ".txt"))
 		*fmt = MVOD_CALIB_FMT_KITTI;
 	else
@@ -115,7 +122,7 @@ static int parse_cli(int argc, char **argv, struct convert *c)
 	c->out = files[1];
 	if (!c->to_given && format_from_name(c->out, &c->to)) {
 		fprintf(stderr, "%s: cannot tell the format from the name %s: give --to "
-				"mvod|opencv|ros|kitti\n", cli_prog, c->out);
+				"mvod|opencv|ros|kitti|dso\n", cli_prog, c->out);
 		return -EINVAL;
 	}
 	return 0;
@@ -150,7 +157,8 @@ static int apply_size(const struct convert *c, struct mvod_camera *cam)
 		cam->width = c->width;
 		cam->height = c->height;
 	}
-	if (!cam->width && (c->to == MVOD_CALIB_FMT_MVOD || c->to == MVOD_CALIB_FMT_ROS)) {
+	if (!cam->width && (c->to == MVOD_CALIB_FMT_MVOD || c->to == MVOD_CALIB_FMT_ROS ||
+			    c->to == MVOD_CALIB_FMT_DSO)) {
 		fprintf(stderr, "%s: %s does not record the image size, which %s output needs: give "
 				"--size WxH\n", cli_prog, c->in, mvod_calib_format_title(c->to));
 		return EXIT_USAGE;
@@ -164,10 +172,12 @@ static int save(const struct convert *c, const struct mvod_camera *cam, char *er
 	case MVOD_CALIB_FMT_OPENCV: return mvod_calib_save_opencv(c->out, cam, err, errlen);
 	case MVOD_CALIB_FMT_ROS: return mvod_calib_save_ros(c->out, cam, err, errlen);
 	case MVOD_CALIB_FMT_KITTI:
+	case MVOD_CALIB_FMT_DSO:
 		if (cam->has_mount)
-			fprintf(stderr, "%s: note: KITTI calib.txt has no place for the mount: it is "
-				"not carried into %s\n", cli_prog, c->out);
-		return mvod_calib_save_kitti(c->out, cam, err, errlen);
+			fprintf(stderr, "%s: note: %s has no place for the mount: it is not carried "
+				"into %s\n", cli_prog, mvod_calib_format_title(c->to), c->out);
+		return (c->to == MVOD_CALIB_FMT_DSO ? mvod_calib_save_dso
+						    : mvod_calib_save_kitti)(c->out, cam, err, errlen);
 	default: break;
 	}
 	struct mvod_calib_meta meta = {.rms_px = -1};

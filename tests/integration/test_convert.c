@@ -104,6 +104,40 @@ static void mount_carried(void **state)
 	assert_non_null(strstr(r.err, "KITTI calib.txt has no place for the mount"));
 }
 
+/*
+ * TUM monoVO's camera.txt (DSO's relative FOV form) -> mvod JSON -> a camera.txt by name, in
+ * DSO's pixel form: the FOV lens carried both ways; ROS has no place for it and says so.
+ */
+static void dso_fov(void **state)
+{
+	(void)state;
+	const char *in = path_in("mono.txt"), *json = path_in("fov.json");
+	char dir[256], out[300];
+	snprintf(dir, sizeof(dir), "%s/dso", harness_tmpdir());
+	assert_int_equal(mkdir(dir, 0755), 0);
+	snprintf(out, sizeof(out), "%s/camera.txt", dir);
+	harness_write_file(in, "0.535719308086809 0.669566858850269 0.493248545285398 "
+			       "0.500408664348414 0.897966326944875\n1280 1024\ncrop\n640 480\n");
+	assert_int_equal(convert(in, json, "--to", "mvod"), 0);
+	assert_non_null(strstr(r.out, "(DSO camera.txt): fov, 1280x1024"));
+	assert_int_equal(convert(json, out, NULL, NULL), 0);
+	char text[512];
+	harness_read_file(out, text, sizeof(text));
+	/* cJSON's 15 digits that read back within an ulp; the size and DSO's crop after. */
+	if (strncmp(text, "FOV 685.72071", 13) != 0 || !strstr(text, " 0.897966326944875\n1280 "
+							       "1024\ncrop\n1280 1024\n"))
+		fail_msg("%s", text);
+	struct mvod_camera a, b;
+	char err[256];
+	assert_int_equal(mvod_calib_load(in, &a, err, sizeof(err)), 0);
+	assert_int_equal(mvod_calib_load(out, &b, err, sizeof(err)), 0);
+	assert_int_equal(b.model, MVOD_CAM_FOV);
+	assert_true(fabs(a.fx - b.fx) <= 2e-16 * a.fx && fabs(a.cy - b.cy) <= 2e-16 * a.cy);
+	assert_true(b.dist[0] == a.dist[0]);
+	assert_int_equal(convert(json, path_in("fov.yaml"), "--to", "ros"), 1);
+	assert_non_null(strstr(r.err, "ROS camera_info has no FOV lens model"));
+}
+
 /* A refused conversion names the reason and leaves an existing OUT untouched. */
 static void refusals_keep_out(void **state)
 {
@@ -140,6 +174,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(ros_mvod_opencv_ros),
 		cmocka_unit_test(mount_carried),
+		cmocka_unit_test(dso_fov),
 		cmocka_unit_test(refusals_keep_out),
 		cmocka_unit_test(usage_errors),
 	};

@@ -510,6 +510,7 @@ static void test_mono_negative_principal_point(void **state)
 	snprintf(path, sizeof(path), "%s/times.txt", dir);
 	harness_write_file(path, text);
 	snprintf(path, sizeof(path), "%s/camera.txt", dir);
+	/* Both below 1, as fractions would be: cy = 120 alone kept the old rule from firing. */
 	harness_write_file(path, "Pinhole 576 576 -5 -3 0\n320 240\ncrop\n320 240\n");
 	snprintf(path, sizeof(path), "tum:%s", dir);
 	struct mvod_source *src;

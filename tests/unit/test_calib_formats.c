@@ -400,6 +400,98 @@ static void test_malformed_opencv_more(void **state)
 	expect_error("root.xml", "<?xml version=\"1.0\"?>\n<storage></storage>\n", "<opencv_storage>");
 }
 
+/* DSO's camera.txt (JakobEngel/dso's README, "Geometric Calibration File"), each form. */
+static void test_dso_reader(void **state)
+{
+	(void)state;
+	struct mvod_camera c;
+	/*
+	 * TUM monoVO's form (bare relative numbers, as mono_dataset_code's FOVUndistorter reads
+	 * them; these values circulate as monoVO's in public repositories), tabs and CRLF too:
+	 * DSO's relative-to-pixel rule, fx w, cx w - 0.5.
+	 */
+	load_ok("camera.txt", "0.535719308086809 0.669566858850269 0.493248545285398 "
+		"0.500408664348414 0.897966326944875\n1280 1024\ncrop\n640 480\n", &c,
+		MVOD_CALIB_FMT_DSO);
+	assert_int_equal(c.model, MVOD_CAM_FOV);
+	assert_int_equal(c.n_dist, 1);
+	assert_true(c.dist[0] == 0.897966326944875);
+	assert_true(c.width == 1280 && c.height == 1024);
+	assert_true(c.fx == 0.535719308086809 * 1280 && c.fy == 0.669566858850269 * 1024);
+	assert_true(c.cx == 0.493248545285398 * 1280 - 0.5 && c.cy == 0.500408664348414 * 1024 - 0.5);
+	load_ok("tabs.txt", "FOV\t0.5357\t0.6695\t0.4932\t0.5004\t0.8979\r\n1280 1024\r\n", &c,
+		MVOD_CALIB_FMT_DSO);
+	assert_true(c.model == MVOD_CAM_FOV && c.dist[0] == 0.8979 && c.cx == 0.4932 * 1280 - 0.5);
+	/* In pixels (cx or cy past 1): K as it is. ATAN, PTAM's name, is the same lens. */
+	load_ok("px.txt", "ATAN 685.7 685.6 631.4 512.4 0.9\n1280 1024\n", &c, MVOD_CALIB_FMT_DSO);
+	assert_true(c.model == MVOD_CAM_FOV && c.fx == 685.7 && c.cx == 631.4);
+	/* w = 0: DSO's pinhole; Pinhole's 5th number is that 0. */
+	load_ok("pin.txt", "0.5 0.6 0.5 0.5 0\n640 480\nnone\n640 480\n\n", &c, MVOD_CALIB_FMT_DSO);
+	assert_true(c.model == MVOD_CAM_PINHOLE_RADTAN && c.n_dist == 0 && c.fx == 320);
+	load_ok("pin2.txt", "Pinhole 400 400 319.5 239.5 0\n640 480\n", &c, MVOD_CALIB_FMT_DSO);
+	assert_true(c.n_dist == 0 && c.cx == 319.5);
+	/* A principal point off the image's top-left (negative) is in pixels, not fractions. */
+	load_ok("pin3.txt", "Pinhole 400 400 -5 -3 0\n640 480\n", &c, MVOD_CALIB_FMT_DSO);
+	assert_true(c.fx == 400 && c.cx == -5 && c.cy == -3);
+	/* RadTan (also 8 bare numbers), EquiDistant and KannalaBrandt. */
+	load_ok("rt.txt", "400 400 319.5 239.5 -0.2 0.05 0.001 -0.001\n640 480\n", &c,
+		MVOD_CALIB_FMT_DSO);
+	assert_true(c.model == MVOD_CAM_PINHOLE_RADTAN && c.n_dist == 4 && c.dist[3] == -0.001);
+	load_ok("kb.txt", "EquiDistant 400 400 319.5 239.5 0.1 -0.02 0.01 -0.002\n640 480\n"
+		"400 400 319.5 239.5 0\n640 480\n", &c, MVOD_CALIB_FMT_DSO);
+	assert_true(c.model == MVOD_CAM_FISHEYE_KB4 && c.n_dist == 4 && c.dist[0] == 0.1);
+}
+
+static void test_dso_malformed(void **state)
+{
+	(void)state;
+	expect_error("d1.txt", "FOV 0.5 0.6 0.5 0.5\n640 480\n", "d1.txt line 1: \"FOV 0.5 0.6 "
+		     "0.5 0.5\" is not one of DSO's lenses");
+	expect_error("d2.txt", "Pinhole 0.5 0.6 0.5 0.5 0.9\n640 480\n", "d2.txt line 1:");
+	expect_error("d3.txt", "FOV 0.5 0.6 0.5 0.5 0.9\n640\n", "d3.txt line 2: expected the "
+		     "image size");
+	expect_error("d4.txt", "FOV 0.5 0.6 0.5 0.5 0.9\n640 480\nkrop\n640 480\n",
+		     "d4.txt line 3: \"krop\" is none of DSO's rectifications");
+	expect_error("d5.txt", "FOV 0.5 0.6 0.5 0.5 0.9\n640 480\ncrop\n", "d5.txt line 4:");
+	expect_error("d6.txt", "FOV 0.5 0.6 0.5 0.5 0.9\n640 480\ncrop\n640 480\n\nx\n",
+		     "d6.txt line 6: DSO's camera.txt has 4 lines");
+	expect_error("d7.txt", "FOV -0.5 0.6 0.5 0.5 0.9\n640 480\n", "d7.txt line 1: the focal "
+		     "lengths must be positive");
+	expect_error("d8.txt", "FOV 0.5 0.6 0.5 0.5 nan\n640 480\n", "d8.txt line 1:");
+}
+
+static struct mvod_camera fov(void)
+{
+	struct mvod_camera c = pinhole(0);
+	c.model = MVOD_CAM_FOV;
+	c.n_dist = 1;
+	c.dist[0] = 0.9 / 1.1;
+	return c;
+}
+
+/* The FOV lens through every writer that has a place for it; ROS has none. */
+static void test_fov_round_trips(void **state)
+{
+	(void)state;
+	struct mvod_camera c = fov();
+	round_trip_within(save_mvod, "fov.json", &c, 1, MVOD_CALIB_FMT_MVOD, CJSON_REL);
+	round_trip(mvod_calib_save_opencv, "fov.yml", &c, 1, MVOD_CALIB_FMT_OPENCV);
+	round_trip(mvod_calib_save_opencv, "fov.xml", &c, 1, MVOD_CALIB_FMT_OPENCV);
+	round_trip(mvod_calib_save_dso, "fovcam.txt", &c, 1, MVOD_CALIB_FMT_DSO);
+	struct mvod_camera k = fisheye(), p = pinhole(5);
+	round_trip(mvod_calib_save_dso, "kbcam.txt", &k, 4, MVOD_CALIB_FMT_DSO);
+	p.dist[4] = 0; /* DSO's RadTan has k1 k2 p1 p2 */
+	round_trip(mvod_calib_save_dso, "rtcam.txt", &p, 4, MVOD_CALIB_FMT_DSO);
+	char err[256] = "";
+	assert_int_equal(mvod_calib_save_ros(path_of("fov.yaml"), &c, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "ROS camera_info has no FOV lens model"));
+	assert_int_equal(mvod_calib_save_kitti(path_of("fovk.txt"), &c, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "this camera has fov distortion"));
+	p.dist[4] = 0.01;
+	assert_int_equal(mvod_calib_save_dso(path_of("rt5.txt"), &p, err, sizeof(err)), -EINVAL);
+	assert_non_null(strstr(err, "DSO's RadTan lens has 4 coefficients"));
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -412,6 +504,9 @@ int main(void)
 		cmocka_unit_test(test_ros_reader),
 		cmocka_unit_test(test_opencv_reader),
 		cmocka_unit_test(test_malformed_opencv_more),
+		cmocka_unit_test(test_dso_reader),
+		cmocka_unit_test(test_dso_malformed),
+		cmocka_unit_test(test_fov_round_trips),
 	};
 	return cmocka_run_group_tests(tests, setup, harness_teardown);
 }

@@ -117,17 +117,17 @@ static struct mvod_source *open_ok(const char *scheme, const char *location)
 static void test_registry(void **state)
 {
 	(void)state;
-	static const char *const schemes[] = {"file", "images", "kitti", "euroc", "tum", "v4l2",
-					      "libcamera"};
+	static const char *const schemes[] = {"file", "images", "kitti", "kitti-raw", "euroc",
+					      "tum", "v4l2", "libcamera"};
 	size_t n = 0;
 	for (; mvod_source_backends[n]; n++) {
 		const struct mvod_source_ops *ops = mvod_source_backends[n];
-		assert_true(n < 7);
+		assert_true(n < 8);
 		assert_string_equal(ops->scheme, schemes[n]);
 		assert_non_null(ops->summary);
 		assert_true(ops->open && ops->read && ops->info && ops->close);
 	}
-	assert_int_equal(n, 7);
+	assert_int_equal(n, 8);
 }
 
 static void test_unknown_scheme(void **state)

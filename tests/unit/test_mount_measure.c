@@ -109,6 +109,20 @@ static void test_combine_drops_a_lifted_board(void **state)
 }
 
 /* Rewritten with every field of mvod calibrate's file kept, the mount added, then replaced. */
+/* The FOV lens is refused before any frame is read: OpenCV undistorts the board's corners. */
+static void test_measure_refuses_fov(void **state)
+{
+	(void)state;
+	struct mvod_mount_opts o = {.source = "images:/nonexistent"};
+	struct mvod_camera cam = {.width = 640, .height = 480, .fx = 400, .fy = 400, .cx = 320,
+				  .cy = 240, .model = MVOD_CAM_FOV, .n_dist = 1, .dist = {0.9}};
+	struct mvod_mount_result res;
+	char err[512] = "";
+	assert_int_equal(mvod_mount_measure(&o, &cam, &res, err, sizeof(err)), -ENOTSUP);
+	assert_non_null(strstr(err, "the camera file's lens is FOV"));
+	mvod_mount_result_free(&res);
+}
+
 static void test_write_keeps_fields(void **state)
 {
 	(void)state;
@@ -168,6 +182,7 @@ int main(void)
 		cmocka_unit_test(test_from_pose_inverts_ground_normal),
 		cmocka_unit_test(test_sd),
 		cmocka_unit_test(test_combine_drops_a_lifted_board),
+		cmocka_unit_test(test_measure_refuses_fov),
 		cmocka_unit_test(test_write_keeps_fields),
 		cmocka_unit_test(test_write_refuses_other_files),
 	};

@@ -1,5 +1,6 @@
-// The public dataset layouts mvod reads as sources (euroc:, tum:), written frame by frame, so
-// that tests can read one rendering back through each layout and through images: and compare.
+// The public dataset layouts mvod reads as sources (euroc:, tum:, kitti-raw:), written frame by
+// frame with the published files' quirks, so that tests read one rendering back through each
+// layout's parser as it meets real data, and through images: to compare.
 #pragma once
 
 #include "render.hpp"
@@ -10,10 +11,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
+#include <string>
 
 namespace synth {
-
-enum class Layout { Euroc, Tum };
 
 // EuRoC's clock: nanoseconds from MH_01_easy's first camera frame, whose sub-microsecond digits
 // (584 ns) make a rounding or a trip through double visible.
@@ -28,21 +29,33 @@ Pose euroc_body_to_camera();
 // The dataset's world (EuRoC's and TUM's motion-capture frame) from mvod's: z up, x along the
 // first camera's view, moved away from the origin.
 Pose dataset_from_world();
+Pose compose(const Pose &a, const Pose &b);
+Pose inverse(const Pose &p);
 
-class DatasetWriter {
+// One layout's files, written frame by frame.
+class LayoutWriter {
 public:
-	// Creates the layout's folders and index files in dir; cam is what sensor.yaml says.
-	DatasetWriter(Layout layout, const std::filesystem::path &dir, const Camera &cam, double fps);
+	virtual ~LayoutWriter() = default;
 	// One frame at t seconds (from 0), its camera-to-world pose in mvod's world.
-	void add(double t, const Pose &pose, const cv::Mat &image);
-	void close();
-
-private:
-	void write_sensor(const Camera &cam, double fps) const;
-	Layout layout_;
-	std::filesystem::path images_; // where the frames go
-	std::filesystem::path index_path_, gt_path_;
-	std::ofstream index_, gt_;
+	virtual void add(double t, const Pose &pose, const cv::Mat &image) = 0;
+	virtual void close() = 0;
 };
+
+// --format euroc, tum, tum-mono or kitti-raw into dir; cam is what the layout's calibration
+// file says, fps the frame rate. Refuses (kExitUsage) a lens the layout cannot describe.
+std::unique_ptr<LayoutWriter> make_layout_writer(const std::string &format,
+						 const std::filesystem::path &dir,
+						 const Camera &cam, double fps);
+
+// The KITTI raw layout (kitti_raw.cpp).
+std::unique_ptr<LayoutWriter> make_kitti_raw_writer(const std::filesystem::path &dir,
+						    const Camera &cam);
+
+// v printed with conv ('g' or 'e') and the fewest digits from min_digits that read back as v:
+// the files say exactly what was rendered, in the form the published ones print.
+std::string exact_number(double v, char conv, int min_digits);
+
+// Opens file for writing with header first; throws on failure.
+void open_file(const std::filesystem::path &file, std::ofstream &out, const char *header);
 
 } // namespace synth

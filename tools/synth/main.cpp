@@ -58,7 +58,20 @@ Writes into DIR (created if missing; earlier outputs there are replaced):
   rgb.txt, rgb/T.png, groundtruth.txt
                            the TUM RGB-D layout (--format tum): times from 1305031102.175304 s;
                            the ground truth as camera poses in the same z-up world
-  times.txt                timestamp of every frame in seconds, one per line
+  times.txt, images/NNNNN.png, camera.txt
+                           the TUM monoVO layout (--format tum-mono): "id time exposure" lines
+                           from the TUM clock; DSO's camera.txt in the relative form (the lens
+                           as 5 bare numbers for --fov, as monoVO ships it); no ground truth
+                           beyond gt.tum and gt.kitti
+  2011_09_26/calib_*.txt, 2011_09_26/2011_09_26_drive_0001_sync/
+                           the KITTI raw layout (--format kitti-raw, no lens): image_00/data/
+                           NNNNNNNNNN.png and timestamps.txt (calendar times from 2011-09-26
+                           13:02:25.964389445), oxts/data/NNNNNNNNNN.txt (the IMU's pose as GPS
+                           latitude, longitude, altitude, roll, pitch, yaw), calib_cam_to_cam.txt
+                           (P_rect_00 the intrinsics), calib_imu_to_velo.txt and
+                           calib_velo_to_cam.txt (KITTI's 2011_09_26 extrinsics)
+  times.txt                timestamp of every frame in seconds, one per line (but for
+                           --format tum-mono, whose times.txt is monoVO's)
   gt.tum, gt.kitti         camera-to-world pose of every frame (OpenCV axes: x right, y down,
                            z forward; metres; for built-in paths the first camera is the world)
   calib.json               intrinsics and distortion (mvod-calibration/1)
@@ -104,13 +117,17 @@ Options:
   --distortion K1,K2,P1,P2[,K3]
                          radial-tangential lens distortion, OpenCV's model (default none)
   --fisheye K1,K2,K3,K4  Kannala-Brandt lens distortion, OpenCV's fisheye model
+  --fov W                the FOV (arctangent) lens of DSO and PTAM, W its field of view in
+                         radians, in (0, pi) (TUM monoVO's are 0.9 to 0.95); not with --board
   --noise SIGMA          additive Gaussian noise, standard deviation in grey levels (default 0)
   --blur SIGMA           Gaussian blur, standard deviation in pixels, applied before the noise
                          (default 0)
   --seed N               seed for the world, its textures and the noise (default 1)
-  --format mkv|png|euroc|tum
+  --format mkv|png|euroc|tum|tum-mono|kitti-raw
                          output format (default mkv); euroc's sensor.yaml holds a
-                         radial-tangential lens of 4 coefficients, or --fisheye
+                         radial-tangential lens of 4 coefficients, or --fisheye; tum-mono's
+                         camera.txt any lens but a 5-coefficient one; kitti-raw's frames are
+                         rectified: no lens
   --codec ffv1|raw       video.mkv's codec (default ffv1), both lossless: raw frames are 1.7
                          times FFV1's bytes on this street's textures and cost nothing to
                          decode, where FFV1 costs about as much as mvod's tracking (46e6
@@ -152,6 +169,7 @@ struct Options {
 	int width = 640, height = 480;
 	double fx = NAN, fy = NAN, cx = NAN, cy = NAN; // NAN: derived from the size
 	bool fisheye = false;
+	bool fov = false;
 	std::vector<double> dist;
 	double noise = 0, blur = 0;
 	uint64_t seed = 1;
@@ -255,7 +273,7 @@ void parse_size(const char *text, Options &o)
 Options parse_options(int argc, char **argv)
 {
 	enum { OUT = 256, PATH, FRAMES, FPS, SIZE, FX, FY, CX, CY, DISTORTION, FISHEYE, NOISE, BLUR, SEED, FORMAT, SPEED,
-	       BOARD, CODEC, VIEWS, INVERTED, FLOOR };
+	       BOARD, CODEC, VIEWS, INVERTED, FLOOR, FOV };
 	static const option longopts[] = {
 		{"out", required_argument, nullptr, OUT},
 		{"path", required_argument, nullptr, PATH},
@@ -278,6 +296,7 @@ Options parse_options(int argc, char **argv)
 		{"views", required_argument, nullptr, VIEWS},
 		{"inverted", no_argument, nullptr, INVERTED},
 		{"floor", required_argument, nullptr, FLOOR},
+		{"fov", required_argument, nullptr, FOV},
 		{"help", no_argument, nullptr, 'h'},
 		{nullptr, 0, nullptr, 0},
 	};
@@ -311,13 +330,21 @@ Options parse_options(int argc, char **argv)
 			o.dist = parse_list(name, optarg, 4, 4);
 			o.fisheye = true;
 			break;
+		case FOV:
+			o.dist = {parse_positive(name, optarg)};
+			if (o.dist[0] >= M_PI)
+				usage_error("--fov: W is the lens's field of view in radians, below pi");
+			o.fov = true;
+			break;
 		case NOISE: o.noise = parse_non_negative(name, optarg); break;
 		case BLUR: o.blur = parse_non_negative(name, optarg); break;
 		case SEED: o.seed = parse_unsigned(name, optarg); break;
 		case FORMAT:
 			o.format = optarg;
-			if (o.format != "mkv" && o.format != "png" && o.format != "euroc" && o.format != "tum")
-				usage_error(std::string("--format: '") + optarg + "' is none of mkv, png, euroc, tum");
+			if (o.format != "mkv" && o.format != "png" && o.format != "euroc" && o.format != "tum" &&
+			    o.format != "tum-mono" && o.format != "kitti-raw")
+				usage_error(std::string("--format: '") + optarg +
+					    "' is none of mkv, png, euroc, tum, tum-mono, kitti-raw");
 			o.png = o.format == "png";
 			break;
 		case SPEED:
@@ -355,8 +382,10 @@ Options parse_options(int argc, char **argv)
 		usage_error("--out DIR is required");
 	if (o.codec_given && o.format != "mkv")
 		usage_error("--codec chooses video.mkv's codec: it needs --format mkv, not " + o.format);
-	if (radtan && o.fisheye)
-		usage_error("--distortion and --fisheye are two lens models: give one");
+	if (int(radtan) + int(o.fisheye) + int(o.fov) > 1)
+		usage_error("--distortion, --fisheye and --fov are three lens models: give one");
+	if (o.fov && !o.board.empty())
+		usage_error("--fov renders the street: the board's corners are projected through OpenCV's lens models");
 	if (o.on_floor && o.board.empty())
 		usage_error("--floor places a --board on the floor: give --board SPEC");
 	if (!o.board.empty() && o.street_options)
@@ -374,6 +403,7 @@ Camera camera_from(const Options &o)
 	cam.cx = std::isnan(o.cx) ? (o.width - 1) / 2.0 : o.cx;
 	cam.cy = std::isnan(o.cy) ? (o.height - 1) / 2.0 : o.cy;
 	cam.fisheye = o.fisheye;
+	cam.fov = o.fov;
 	cam.dist = o.dist;
 	return cam;
 }
@@ -402,13 +432,13 @@ public:
 							    (ec ? ec.message() : "not a directory"));
 		if (png_)
 			remove_old_frames();
-		if (o.format == "euroc" || o.format == "tum")
-			dataset_ = std::make_unique<DatasetWriter>(o.format == "euroc" ? Layout::Euroc : Layout::Tum,
-								   dir_, cam, o.fps);
+		if (o.format != "mkv" && o.format != "png")
+			dataset_ = make_layout_writer(o.format, dir_, cam, o.fps);
 		save_calibration(cam, command_line);
 		open_trajectory("gt.tum", MVOD_TRAJ_TUM, &tum_);
 		open_trajectory("gt.kitti", MVOD_TRAJ_KITTI, &kitti_);
-		open_times(dir_ / "times.txt", times_);
+		if (o.format != "tum-mono") // monoVO's times.txt is its frame index, the layout's
+			open_times(dir_ / "times.txt", times_);
 		if (png_) {
 			open_times(dir_ / "images" / "times.txt", image_times_);
 		} else if (!dataset_) {
@@ -438,7 +468,8 @@ public:
 		} else {
 			video_.write(image);
 		}
-		write_time(times_, t);
+		if (times_.is_open())
+			write_time(times_, t);
 		if (png_)
 			write_time(image_times_, t);
 
@@ -458,7 +489,8 @@ public:
 		video_.close();
 		if (dataset_)
 			dataset_->close();
-		close_times(dir_ / "times.txt", times_);
+		if (times_.is_open())
+			close_times(dir_ / "times.txt", times_);
 		if (png_)
 			close_times(dir_ / "images" / "times.txt", image_times_);
 		close_trajectory("gt.tum", &tum_);
@@ -502,7 +534,7 @@ private:
 		c.fy = cam.fy;
 		c.cx = cam.cx;
 		c.cy = cam.cy;
-		c.model = cam.fisheye ? MVOD_CAM_FISHEYE_KB4 : MVOD_CAM_PINHOLE_RADTAN;
+		c.model = cam.fov ? MVOD_CAM_FOV : cam.fisheye ? MVOD_CAM_FISHEYE_KB4 : MVOD_CAM_PINHOLE_RADTAN;
 		c.n_dist = int(cam.dist.size());
 		std::copy(cam.dist.begin(), cam.dist.end(), c.dist);
 
@@ -561,7 +593,7 @@ private:
 	bool raw_; // video.mkv uncompressed (--codec raw)
 	std::string board_;
 	VideoWriter video_; // video.mkv (--format mkv)
-	std::unique_ptr<DatasetWriter> dataset_; // --format euroc or tum
+	std::unique_ptr<LayoutWriter> dataset_; // --format euroc, tum, tum-mono or kitti-raw
 	std::ofstream times_, image_times_;
 	mvod_traj_writer *tum_ = nullptr, *kitti_ = nullptr;
 	int frames_ = 0;
@@ -605,7 +637,7 @@ void check_lens(const Renderer &renderer, const Options &o)
 		char message[160];
 		std::snprintf(message, sizeof message,
 			      "--%s: these coefficients fold the image over (some pixels have no ray; worst miss %.3g px)",
-			      o.fisheye ? "fisheye" : "distortion", renderer.worst_ray_error());
+			      o.fov ? "fov" : o.fisheye ? "fisheye" : "distortion", renderer.worst_ray_error());
 		usage_error(message);
 	}
 }

@@ -3,6 +3,10 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
 
+extern "C" {
+#include "mvod/calib.h"
+}
+
 #include <algorithm>
 #include <cmath>
 
@@ -45,6 +49,17 @@ std::vector<cv::Vec2d> undistort(const Camera &cam, const std::vector<cv::Vec2d>
 		return rays;
 	}
 
+	if (cam.fov) {
+		// The FOV lens's inverse is closed (mvod_fov_undistort_radius): exact, no iteration.
+		for (const cv::Vec2d &p : pixels) {
+			const cv::Vec2d d((p[0] - cam.cx) / cam.fx, (p[1] - cam.cy) / cam.fy);
+			const double rd = cv::norm(d), r = mvod_fov_undistort_radius(cam.dist[0], rd);
+			rays.push_back(rd > 0 ? d * (r / rd) : d);
+			const double back = mvod_fov_distort_radius(cam.dist[0], r) * std::max(cam.fx, cam.fy);
+			worst = std::max(worst, std::isfinite(r) ? std::fabs(back - rd * std::max(cam.fx, cam.fy)) : INFINITY);
+		}
+		return rays;
+	}
 	const cv::Matx33d K(cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
 	// OpenCV's default of 5 (radial-tangential) or 10 (fisheye) iterations leaves visible errors
 	// at the image corners for strong lenses; iterate to convergence instead.

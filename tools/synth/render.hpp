@@ -15,6 +15,7 @@ struct Camera {
 	int width = 0, height = 0;
 	double fx = 0, fy = 0, cx = 0, cy = 0;
 	bool fisheye = false;     // Kannala-Brandt k1..k4 (cv::fisheye) instead of radial-tangential
+	bool fov = false;         // the FOV lens of DSO and PTAM, dist = {w} (radians), mvod's closed form
 	std::vector<double> dist; // empty: an ideal pinhole
 };
 

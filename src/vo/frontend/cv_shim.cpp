@@ -46,7 +46,13 @@ static void build_maps(mvod_cv_preproc *p, const struct mvod_camera *cam, const 
 	const cv::Matx33d K = K_of(cam);
 	cv::Mat D(1, cam->n_dist, CV_64F, const_cast<double *>(cam->dist));
 	cv::Size size(p->out_w, p->out_h);
-	if (cam->model == MVOD_CAM_FISHEYE_KB4)
+	if (cam->model == MVOD_CAM_FOV) {
+		/* No FOV lens in OpenCV: calib/lens.c's closed form, stored as OpenCV's below. */
+		cv::Mat mx(size, CV_32FC1), my(size, CV_32FC1);
+		mvod_camera_undistort_maps(cam, Knew.val, size.width, size.height, mx.ptr<float>(),
+					   my.ptr<float>());
+		cv::convertMaps(mx, my, p->map1, p->map2, CV_16SC2);
+	} else if (cam->model == MVOD_CAM_FISHEYE_KB4)
 		cv::fisheye::initUndistortRectifyMap(K, D, cv::Matx33d::eye(), Knew, size, CV_16SC2,
 						     p->map1, p->map2);
 	else
