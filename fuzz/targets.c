@@ -20,9 +20,9 @@
 #include <lcm/eventlog.h>
 
 #include "capture/dataset.h"
-#include "capture/euroc.h"
+#include "capture/euroc_sensor.h"
 #include "capture/image_header.h"
-#include "capture/kitti_raw.h"
+#include "capture/oxts.h"
 #include "capture/png_grey.h"
 #include "capture/uri.h"
 #include "mvod/board.h"

@@ -84,7 +84,7 @@ int mvod_camera_check(const struct mvod_camera *cam, char *err, size_t errlen);
 
 /*
  * Where the normalised undistorted point (x, y) (a ray at z = 1) lands, distorted and still
- * normalised, through cam's lens (src/calib/lens.c).
+ * normalised, through cam's lens (src/camera/lens.c).
  */
 void mvod_camera_distort(const struct mvod_camera *cam, double x, double y, double *xd,
 			 double *yd);

@@ -1,4 +1,4 @@
-/* What the capture backends share: their registration and path helpers (errors: util/errbuf.h). */
+/* The capture backends' registration: the ops table of each scheme (source.c lists them). */
 #ifndef MVOD_CAPTURE_BACKENDS_H
 #define MVOD_CAPTURE_BACKENDS_H
 
@@ -16,8 +16,5 @@ extern const struct mvod_source_ops mvod_source_tum_ops;
 extern const struct mvod_source_ops mvod_source_v4l2_ops;
 extern const struct mvod_source_ops mvod_source_libcamera_ops;
 
-/* "dir/name" into buf; -ENAMETOOLONG with the reason in err when it does not fit. */
-int mvod_capture_path(char *buf, size_t len, const char *dir, const char *name, char *err,
-		      size_t errlen);
 
 #endif

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "capture/path.h"
 #include "util/output.h"
 
 static_assert(offsetof(struct mvod_dataset, images) == 0, "the images ops take the dataset priv");

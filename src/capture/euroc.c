@@ -5,6 +5,7 @@
  * mav0/state_groundtruth_estimate0/data.csv (body poses, turned into this camera's by T_BS).
  */
 #include "capture/backends.h"
+#include "capture/path.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -13,7 +14,7 @@
 #include <sys/stat.h>
 
 #include "capture/dataset.h"
-#include "capture/euroc.h"
+#include "capture/euroc_sensor.h"
 #include "capture/uri.h"
 #include "util/lines.h"
 

@@ -6,7 +6,7 @@
  * for OpenCV's FileStorage begins with "%YAML:1.0" (Kimera-VIO asks for one in every file),
  * which plain libyaml refuses. Every error names the file and the line.
  */
-#include "capture/euroc.h"
+#include "capture/euroc_sensor.h"
 
 #include <errno.h>
 #include <math.h>

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "capture/image_header.h"
+#include "capture/path.h"
 #include "mvod/log.h"
 #include "util/input.h"
 #include "util/lines.h"

@@ -1,5 +1,6 @@
 /* kitti:SEQDIR, the KITTI odometry layout: image_0/, times.txt, calib.txt (P0). */
 #include "capture/backends.h"
+#include "capture/path.h"
 
 #include <assert.h>
 #include <errno.h>

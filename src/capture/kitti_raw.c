@@ -6,6 +6,7 @@
  * drive's packet NNNNNNNNNN is frame NNNNNNNNNN's (the devkit's synchronisation).
  */
 #include "capture/backends.h"
+#include "capture/path.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -17,7 +18,7 @@
 #include <unistd.h>
 
 #include "capture/dataset.h"
-#include "capture/kitti_raw.h"
+#include "capture/oxts.h"
 #include "mvod/log.h"
 #include "util/lines.h"
 

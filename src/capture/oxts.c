@@ -3,7 +3,7 @@
  * raw data devkit's convertOxtsToPose (and pykitti's pose_from_oxts_packet) does, and the
  * "KEY: numbers" calibration files that carry the camera and the IMU-to-camera extrinsics.
  */
-#include "capture/kitti_raw.h"
+#include "capture/oxts.h"
 
 #include <errno.h>
 #include <limits.h>

@@ -40,16 +40,6 @@ struct mvod_source {
 	max_align_t priv[];           /* ops->priv_size bytes of backend state */
 };
 
-int mvod_capture_path(char *buf, size_t len, const char *dir, const char *name, char *err,
-		      size_t errlen)
-{
-	int n = snprintf(buf, len, "%s/%s", dir, name);
-	if (n < 0 || (size_t)n >= len)
-		return mvod_errf(err, errlen, -ENAMETOOLONG, "path too long: %s/%s", dir,
-					 name);
-	return 0;
-}
-
 /* The backend whose scheme prefixes uri, with *location pointing past the colon. */
 static const struct mvod_source_ops *find_backend(const char *uri, const char **location)
 {

@@ -3,10 +3,11 @@
  * the colour images it names, groundtruth.txt (the colour camera's pose, "timestamp tx ty tz
  * qx qy qz qw"); intrinsics from --calib or from the published ones of freiburg1/2/3 when
  * the folder name says which. The monoVO dataset: times.txt ("id timestamp exposure"),
- * images/ID.jpg, camera.txt (DSO's, read by calib/calib_dso.c: FOV, pinhole, RadTan and
+ * images/ID.jpg, camera.txt (DSO's, read by camera/calib_dso.c: FOV, pinhole, RadTan and
  * Kannala-Brandt lenses; no ground truth).
  */
 #include "capture/backends.h"
+#include "capture/path.h"
 
 #include <assert.h>
 #include <errno.h>

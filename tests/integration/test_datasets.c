@@ -21,7 +21,7 @@
 #include <cmocka.h>
 
 #include "harness.h"
-#include "capture/euroc.h"
+#include "capture/euroc_sensor.h"
 #include "mvod/calib.h"
 #include "mvod/capture.h"
 

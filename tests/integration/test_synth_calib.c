@@ -26,7 +26,7 @@
 
 #include "harness.h"
 
-#include "calib/calib_internal.h"
+#include "camera/calib_internal.h"
 #include "mvod/board.h"
 #include "mvod/calib.h"
 #include "mvod/geom.h"

@@ -16,8 +16,8 @@
 #include "harness.h"
 
 #include "capture/dataset.h"
-#include "capture/euroc.h"
-#include "capture/kitti_raw.h"
+#include "capture/euroc_sensor.h"
+#include "capture/oxts.h"
 
 static void test_parse_ns(void **state)
 {

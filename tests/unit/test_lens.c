@@ -1,5 +1,5 @@
 /*
- * The FOV lens (calib/lens.c) against its closed form, forward and back; the undistortion
+ * The FOV lens (camera/lens.c) against its closed form, forward and back; the undistortion
  * maps cv_shim.cpp remaps FOV frames through; and mvod_camera_check on FOV lenses.
  */
 #include <errno.h>

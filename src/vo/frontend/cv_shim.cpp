@@ -47,7 +47,7 @@ static void build_maps(mvod_cv_preproc *p, const struct mvod_camera *cam, const 
 	cv::Mat D(1, cam->n_dist, CV_64F, const_cast<double *>(cam->dist));
 	cv::Size size(p->out_w, p->out_h);
 	if (cam->model == MVOD_CAM_FOV) {
-		/* No FOV lens in OpenCV: calib/lens.c's closed form, stored as OpenCV's below. */
+		/* No FOV lens in OpenCV: camera/lens.c's closed form, stored as OpenCV's below. */
 		cv::Mat mx(size, CV_32FC1), my(size, CV_32FC1);
 		mvod_camera_undistort_maps(cam, Knew.val, size.width, size.height, mx.ptr<float>(),
 					   my.ptr<float>());

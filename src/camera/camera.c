@@ -8,7 +8,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "calib/calib_internal.h"
+#include "camera/calib_internal.h"
 
 static const char *const model_names[] = {"pinhole-radtan", "fisheye-kb4", "fov"};
 #define N_MODELS ((int)(sizeof(model_names) / sizeof(model_names[0])))

@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "calib/calib_internal.h"
+#include "camera/calib_internal.h"
 #include "util/errbuf.h"
 #include "util/numbers.h"
 

@@ -9,7 +9,7 @@
 
 #include <cjson/cJSON.h>
 
-#include "calib/calib_internal.h"
+#include "camera/calib_internal.h"
 #include "util/atomic_file.h"
 #include "util/errbuf.h"
 #include "util/input.h"

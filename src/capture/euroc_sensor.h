@@ -1,6 +1,6 @@
-/* euroc:DIR, the EuRoC MAV (ASL) layout: mav0/camN/{data.csv,data/,sensor.yaml}. */
-#ifndef MVOD_CAPTURE_EUROC_H
-#define MVOD_CAPTURE_EUROC_H
+/* euroc:DIR's camera file (the EuRoC MAV, ASL, layout: mav0/camN/{data.csv,data/,sensor.yaml}). */
+#ifndef MVOD_CAPTURE_EUROC_SENSOR_H
+#define MVOD_CAPTURE_EUROC_SENSOR_H
 
 #include <stddef.h>
 

@@ -20,7 +20,7 @@
 #include <libxml/tree.h>
 #include <yaml.h>
 
-#include "calib/calib_internal.h"
+#include "camera/calib_internal.h"
 #include "util/cvyaml.h"
 #include "util/errbuf.h"
 #include "util/text_guard.h"

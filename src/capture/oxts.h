@@ -2,10 +2,11 @@
  * kitti-raw:DRIVE, a drive of the KITTI raw data as downloaded (the raw data devkit's readme;
  * pykitti's raw.py reads the same): DATE/DATE_drive_NNNN_sync/image_00/{data/,timestamps.txt},
  * oxts/data/NNNNNNNNNN.txt, and the date's calib_cam_to_cam.txt, calib_imu_to_velo.txt and
- * calib_velo_to_cam.txt beside the drive. The parts tests and fuzzing reach.
+ * calib_velo_to_cam.txt beside the drive: its OXTS packets and calibration files (oxts.c), the
+ * parts kitti_raw.c, tests and fuzzing reach.
  */
-#ifndef MVOD_CAPTURE_KITTI_RAW_H
-#define MVOD_CAPTURE_KITTI_RAW_H
+#ifndef MVOD_CAPTURE_OXTS_H
+#define MVOD_CAPTURE_OXTS_H
 
 #include <stddef.h>
 
