@@ -144,7 +144,7 @@ ARM64_DEBS := gcc-aarch64-linux-gnu qemu-user-static libcmocka-dev:arm64 \
 ARM64_CC := aarch64-linux-gnu-gcc -std=c11 -D_GNU_SOURCE -O2 -Wall -Werror -Iinclude -Isrc \
 	-I$(BUILDDIR)/lcmtypes -I/usr/include/libxml2
 # test name:the sources it tests (the Hamming distance is header-only)
-ARM64_TESTS := hamming: mailbox:src/capture/mailbox.c geom:src/util/geom.c kernels:src/util/kernels.c lk:src/vo/lk.c
+ARM64_TESTS := hamming: mailbox:src/capture/mailbox.c geom:src/util/geom.c kernels:src/util/kernels.c lk:src/vo/frontend/lk.c
 
 cross-arm64: build
 	@dpkg --print-foreign-architectures | grep -qx arm64 || \

@@ -186,13 +186,31 @@ def build(targets, log):
     return run(["ninja", "-C", BUILD] + targets, log) == 0
 
 
-def test(tests, filt, log):
-    """True when every named test passes (a skip counts as a pass, as in make test). filt, if
-    not None, is a cmocka pattern: only the matching cases of each test run (MVOD_TEST_FILTER,
-    read by tests/common/harness.c)."""
-    extra = {"MVOD_TEST_FILTER": filt} if filt else {}
-    return run(["meson", "test", "-C", BUILD, "--no-rebuild", "--print-errorlogs",
-                "--timeout-multiplier", TIMEOUT_MULTIPLIER] + tests, log, extra) == 0
+def filters(m):
+    """{test: cmocka pattern or None} for mutation m. Its filter is one pattern for every test
+    it names, or TEST=PATTERN words, each for that test alone (the others run whole): a unit
+    test's case and a data test's case seldom share a pattern."""
+    value = m.get("filter")
+    if not value:
+        return {t: None for t in m["tests"]}
+    words = value.split()
+    if not any("=" in w for w in words):
+        return {t: value for t in m["tests"]}
+    per = dict(w.split("=", 1) for w in words)
+    return {t: per.get(t) for t in m["tests"]}
+
+
+def test(by_test, log):
+    """True when every test passes (a skip counts as a pass, as in make test). by_test maps
+    each test to a cmocka pattern or None: only the matching cases of that test run
+    (MVOD_TEST_FILTER, read by tests/common/harness.c); one meson run per pattern."""
+    for filt in sorted(set(by_test.values()), key=lambda f: f or ""):
+        tests = sorted(t for t, f in by_test.items() if f == filt)
+        extra = {"MVOD_TEST_FILTER": filt} if filt else {}
+        if run(["meson", "test", "-C", BUILD, "--no-rebuild", "--print-errorlogs",
+                "--timeout-multiplier", TIMEOUT_MULTIPLIER] + tests, log, extra) != 0:
+            return False
+    return True
 
 
 def mutate(m, files, log):
@@ -219,7 +237,7 @@ def mutate(m, files, log):
             f.write(mutated)
         if not build(targets, log):
             return "broken", "the mutated tree does not build"
-        return ("NOT CAUGHT", "") if test(m["tests"], m.get("filter"), log) else ("caught", "")
+        return ("NOT CAUGHT", "") if test(filters(m), log) else ("caught", "")
     finally:
         with open(path, "w") as f:
             f.write(clean)
@@ -254,11 +272,12 @@ def main(argv):
         sys.exit(f"mutate: the clean tree does not build; see {log}")
     if "--no-baseline" not in argv:
         # The clean tree against each test with each filter some mutation runs it with.
-        for filt in sorted({m.get("filter") for m in muts}, key=lambda f: f or ""):
-            tests = sorted({t for m in muts if m.get("filter") == filt for t in m["tests"]})
+        pairs = {(t, f) for m in muts for t, f in filters(m).items()}
+        for filt in sorted({f for _, f in pairs}, key=lambda f: f or ""):
+            tests = sorted({t for t, f in pairs if f == filt})
             print("mutate: the clean tree against " + " ".join(tests) +
                   (f" (cases {filt})" if filt else ""), flush=True)
-            if not test(tests, filt, log):
+            if not test({t: filt for t in tests}, log):
                 sys.exit(f"mutate: tests fail on the clean tree, so no result would mean "
                          f"anything; see {log}")
     rows = []

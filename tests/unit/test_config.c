@@ -1,8 +1,9 @@
 /*
  * The config file: every key lands in its own field (checked by field name, not through the
  * table, so a wrong offset in the table fails here); each kind of error names file, line and
- * key; flags override the file; --print-config output parses back to the same settings; and
- * the example mvod.conf shipped for the service parses and sets every key.
+ * key; flags override the file; --print-config output parses back to the same settings; the
+ * example mvod.conf shipped for the service parses and sets every key; and the VO's options
+ * that clash with one another are refused before any run (check.c).
  */
 #include <errno.h>
 #include <setjmp.h>
@@ -15,6 +16,7 @@
 #include <cmocka.h>
 
 #include "mvod/config.h"
+#include "mvod/vo.h"
 
 static int parse(const char *text, struct mvod_config *c, char *err, size_t errlen)
 {
@@ -399,6 +401,47 @@ static void test_example_config(void **state)
 	assert_non_null(strstr(err, "/nonexistent/mvod.conf"));
 }
 
+/* p is refused, and the message names every flag of needles (NULL-ended). */
+static void refused(const struct mvod_vo_params *p, const char *const *needles)
+{
+	char err[256] = "";
+	assert_int_equal(mvod_config_check_frontend(p, err, sizeof(err)), -EINVAL);
+	for (int i = 0; needles[i]; i++)
+		if (!strstr(err, needles[i]))
+			fail_msg("'%s' not in: %s", needles[i], err);
+}
+
+/*
+ * The clashes of the VO's options (check.c), refused before anything runs, each message
+ * naming the flags: map mode with SIFT (its map keeps ORB descriptors; else mapmode.c refuses
+ * it only once the run has started), --tracks where ORB runs, a descriptor option with
+ * --frontend klt. Their neighbours pass: SIFT in two-view mode, --tracks with KLT, the
+ * defaults. (tests/integration/test_refusals.c has the same case on the command line.)
+ */
+static void test_option_clashes(void **state)
+{
+	(void)state;
+	struct mvod_vo_params d, p;
+	mvod_vo_params_default(&d);
+	char err[256];
+	assert_int_equal(mvod_config_check_frontend(&d, err, sizeof(err)), 0);
+	p = d;
+	p.detector = MVOD_DETECTOR_SIFT;
+	refused(&p, (const char *const[]){"--mode map", "sift", "--mode twoview", NULL});
+	p.mode = MVOD_VO_TWOVIEW;
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
+	p = d;
+	p.frontend = MVOD_FRONTEND_ORB;
+	p.max_tracks = 300;
+	refused(&p, (const char *const[]){"--tracks", "--frontend orb", NULL});
+	p.frontend = MVOD_FRONTEND_KLT;
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
+	p = d;
+	p.frontend = MVOD_FRONTEND_KLT;
+	p.matcher = MVOD_MATCHER_FLANN;
+	refused(&p, (const char *const[]){"--matcher", "--frontend klt", NULL});
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -412,6 +455,7 @@ int main(void)
 		cmocka_unit_test(test_print_refuses),
 		cmocka_unit_test(test_print_leaves_format_derived),
 		cmocka_unit_test(test_example_config),
+		cmocka_unit_test(test_option_clashes),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

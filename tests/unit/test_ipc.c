@@ -206,6 +206,60 @@ static void test_pose_roundtrip(void **state)
 	mvod_ipc_destroy(ipc);
 }
 
+/*
+ * The published orientation's axis order: a pose turned 90 deg about x, then one about y, then
+ * one about z (each alone, and each the other way round) comes back from the wire as (w, x, y,
+ * z) = (cos 45, sin 45 along that axis only), in the v1 message and the v2 one. A quaternion
+ * with two of x, y, z swapped is another rotation (about another axis) that every reader would
+ * take at its word; the rotations about y that test_pose_roundtrip publishes cannot tell x
+ * from z. Each R is written out here, camera-to-world, rows first (R[3 * r + c]), so the
+ * expected quaternion does not come from the code under test. 1e-12: Shepperd's method on
+ * entries 0, 1 and -1 rounds to a few ulps (the sine and cosine of 45 deg themselves).
+ */
+static void test_pose_axis_order(void **state)
+{
+	struct fixture *f = *state;
+	static const struct {
+		double R[9];
+		int axis;  /* 1: x, 2: y, 3: z (the quaternion's index) */
+		double s;  /* the sign of the turn */
+	} turns[] = {
+		{{1, 0, 0, 0, 0, -1, 0, 1, 0}, 1, 1},  /* +90 about x: y -> z */
+		{{0, 0, 1, 0, 1, 0, -1, 0, 0}, 2, 1},  /* +90 about y: z -> x */
+		{{0, -1, 0, 1, 0, 0, 0, 0, 1}, 3, 1},  /* +90 about z: x -> y */
+		{{1, 0, 0, 0, 0, 1, 0, -1, 0}, 1, -1}, /* -90 about x */
+		{{0, 0, -1, 0, 1, 0, 1, 0, 0}, 2, -1}, /* -90 about y */
+		{{0, 1, 0, -1, 0, 0, 0, 0, 1}, 3, -1}, /* -90 about z */
+	};
+	enum { TURNS = sizeof(turns) / sizeof(turns[0]) };
+	struct mvod_ipc *ipc = NULL;
+	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
+	mvod_pose_t_subscription_t *sub =
+		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, on_pose, &f->got);
+	mvod_pose2_t_subscription_t *sub2 =
+		mvod_pose2_t_subscribe(f->lcm, "MVOD_POSE2", on_pose2, &f->got);
+	for (int i = 0; i < TURNS; i++) {
+		struct mvod_vo_result res = {.state = MVOD_STATE_TRACKING};
+		memcpy(res.pose.R, turns[i].R, sizeof(res.pose.R));
+		assert_int_equal(mvod_ipc_publish_pose(ipc, utime_of(i), i, &res), 0);
+	}
+	for (int i = 0; i < 2 * TURNS; i++)
+		assert_true(lcm_handle_timeout(f->lcm, 1000) > 0);
+	assert_int_equal(f->got.n_poses, TURNS);
+	assert_int_equal(f->got.n_poses2, TURNS);
+	for (int i = 0; i < TURNS; i++) {
+		double want[4] = {M_SQRT1_2, 0, 0, 0};
+		want[turns[i].axis] = turns[i].s * M_SQRT1_2;
+		for (int k = 0; k < 4; k++) {
+			assert_float_equal(f->got.poses[i].orientation[k], want[k], 1e-12);
+			assert_float_equal(f->got.poses2[i].orientation[k], want[k], 1e-12);
+		}
+	}
+	mvod_pose_t_unsubscribe(f->lcm, sub);
+	mvod_pose2_t_unsubscribe(f->lcm, sub2);
+	mvod_ipc_destroy(ipc);
+}
+
 static void test_status_roundtrip(void **state)
 {
 	struct fixture *f = *state;
@@ -634,6 +688,7 @@ int main(void)
 {
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test_setup_teardown(test_pose_roundtrip, setup, teardown),
+		cmocka_unit_test_setup_teardown(test_pose_axis_order, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_status_roundtrip, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_custom_channels, setup, teardown),
 		cmocka_unit_test_setup_teardown(test_bad_channels, setup, teardown),

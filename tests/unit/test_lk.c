@@ -4,7 +4,9 @@
  * (SSE2 and AVX2 on x86-64, NEON on arm64) gives exactly what the plain C gives; a smooth
  * texture moved by a known sub-pixel shift is tracked to it; a flat patch and a window that
  * leaves the image fail; the Scharr derivatives equal the kernels' on every path. Needs only the C
- * library and cmocka, so make cross-arm64 runs it under qemu too.
+ * library and cmocka, so make cross-arm64 runs it under qemu too; where meson builds it, with
+ * OpenCV's calcOpticalFlowPyrLK beside it (lk_opencv.cpp), every status equals OpenCV's on
+ * low-contrast, edge and corner patches, and every position where both accept.
  */
 #include <errno.h>
 #include <math.h>
@@ -18,6 +20,11 @@
 #include <cmocka.h>
 
 #include "vo/frontend/lk.h"
+#ifdef MVOD_HAVE_OPENCV_LK
+#include "lk_opencv.h"
+#include "mvod/image.h"
+#include "vo/frontend/klt_shim.h"
+#endif
 
 enum { W = 160, H = 120, BORDER = 32, LEVELS = 2 };
 
@@ -316,6 +323,203 @@ static void test_scharr(void **state)
 	}
 }
 
+#ifdef MVOD_HAVE_OPENCV_LK
+/*
+ * Against OpenCV's own calcOpticalFlowPyrLK: where lk.c rejects a point and where it accepts
+ * one, not only on flat patches. A 360 x 240 image, 8 x 6 blocks of 40 px, each one kind of
+ * patch, and a flat margin 40 px wide on the right (below):
+ *
+ *   rows 0-2  low contrast: value noise (random grey levels on the pixel lattice, bilinear
+ *             between them) of amplitude 0.25 .. 3.7 grey levels, block by block, across the
+ *             amplitude where a 21 px window's smaller eigenvalue crosses OpenCV's 1e-4 (about
+ *             1.7 grey levels here), so that both verdicts are decided there;
+ *   rows 3-4  a straight step edge through the block at a random angle, 20-90 grey levels,
+ *             blurred over EDGE_PX pixels as a lens blurs it: the aperture problem, one
+ *             eigenvalue near zero, rejected (most by the determinant's test too, some by
+ *             the minimum eigenvalue's alone);
+ *   row 5     a corner (two perpendicular edges), well conditioned: accepted, and its sums
+ *             are large enough (over 2^24) that the two trackers' float additions, made in
+ *             another order, round differently.
+ *
+ * J is the same scene moved by (1.6, -0.7) px and rounded again. Five points a block, within
+ * 5 px of its centre (a 21 px window stays inside the block), their guesses the shift plus up
+ * to 1.5 px of error. lk.c's pyramids are built as the KLT front end builds them (klt_shim.h:
+ * buildOpticalFlowPyramid, then lk.c's Scharr derivatives), OpenCV's by calcOpticalFlowPyrLK
+ * from the images.
+ *
+ * The margin: lk.c reads a window's rows as whole vectors (the window rounded up to 8 pixels,
+ * plus one), which must lie in the level and its border, where OpenCV only asks that the
+ * window's corner lie in the level. On the right the two differ by up to 7 pixels, times 2^l
+ * on level l: a 9 px window skips level 3 within about 40 px of the right edge where OpenCV
+ * tracks on it (the point's status is the same, its position is not: 0.014 px here). Points
+ * are kept out of that strip; inside the image at level 0, and on every other edge, the rules
+ * agree.
+ */
+enum { BX = 8, BY = 6, CB = 40, CW = BX * CB + CB, CH = BY * CB, PER_BLOCK = 5 };
+enum { CN = BX * BY * PER_BLOCK };
+#define SHIFT_X 1.6
+#define SHIFT_Y (-0.7)
+
+struct patch {
+	int kind; /* 0 low contrast, 1 edge, 2 corner */
+	double amp; /* noise amplitude, or the edges' contrast, grey levels */
+	double nx, ny, off; /* the edges' normal, and their offset from the block's centre */
+};
+
+static struct patch patches[BY][BX];
+static float noise_lattice[(CH + 2) * (CW + 2)];
+static uint8_t img_i[CH * CW], img_j[CH * CW];
+
+/* A step blurred over EDGE_PX pixels, at signed distance d from its middle: 0 .. 1. */
+#define EDGE_PX 4.0
+static double ramp(double d)
+{
+	d /= EDGE_PX;
+	return d < -0.5 ? 0 : d > 0.5 ? 1 : d + 0.5;
+}
+
+/* The scene's grey level at (x, y), any real position inside the image. */
+static double scene(double x, double y)
+{
+	int bx = (int)floor(x / CB), by = (int)floor(y / CB);
+	if (bx >= BX || bx < 0 || by < 0 || by >= BY)
+		return 128;
+	const struct patch *p = &patches[by][bx];
+	double u = x - (bx + 0.5) * CB, v = y - (by + 0.5) * CB;
+	if (p->kind == 0) {
+		double fx = floor(x), fy = floor(y), a = x - fx, b = y - fy;
+		const float *r0 = noise_lattice + ((int)fy + 1) * (CW + 2) + (int)fx + 1;
+		const float *r1 = r0 + CW + 2;
+		double n = (1 - a) * (1 - b) * r0[0] + a * (1 - b) * r0[1] + (1 - a) * b * r1[0] +
+			   a * b * r1[1];
+		return 128 + p->amp * n;
+	}
+	double d1 = p->nx * u + p->ny * v - p->off, d2 = -p->ny * u + p->nx * v - p->off;
+	return 128 + p->amp * ((p->kind == 1 ? ramp(d1) : ramp(d1) * ramp(d2)) - 0.5);
+}
+
+static uint8_t grey(double v)
+{
+	return (uint8_t)(v < 0 ? 0 : v > 255 ? 255 : lrint(v));
+}
+
+/* A uniform double in [lo, hi], in steps of 1e-3. */
+static double uniform(uint64_t *seed, double lo, double hi)
+{
+	return lo + (hi - lo) * (double)(next_word(seed) % 1001) / 1000.0;
+}
+
+/* The blocks' patches, the points (kind[i]: their block's) and the two images. */
+static void make_scene(uint64_t *seed, float *from, float *guess, int *kind)
+{
+	for (size_t i = 0; i < sizeof(noise_lattice) / sizeof(noise_lattice[0]); i++)
+		noise_lattice[i] = (float)uniform(seed, -1, 1);
+	int k = 0;
+	for (int by = 0; by < BY; by++)
+		for (int bx = 0; bx < BX; bx++) {
+			struct patch *p = &patches[by][bx];
+			double th = uniform(seed, 0, 2 * M_PI);
+			p->kind = by < 3 ? 0 : by < 5 ? 1 : 2;
+			p->amp = p->kind == 0 ? 0.25 + 0.15 * (by * BX + bx) : uniform(seed, 20, 90);
+			p->nx = cos(th);
+			p->ny = sin(th);
+			p->off = uniform(seed, -3, 3);
+			for (int q = 0; q < PER_BLOCK; q++, k++) {
+				kind[k] = p->kind;
+				for (int c = 0; c < 2; c++) {
+					double at = ((c ? by : bx) + 0.5) * CB + uniform(seed, -5, 5);
+					from[2 * k + c] = (float)at;
+					guess[2 * k + c] = (float)(at + (c ? SHIFT_Y : SHIFT_X) +
+								   uniform(seed, -1.5, 1.5));
+				}
+			}
+		}
+	for (int y = 0; y < CH; y++)
+		for (int x = 0; x < CW; x++) {
+			img_i[y * CW + x] = grey(scene(x, y));
+			img_j[y * CW + x] = grey(scene(x - SHIFT_X, y - SHIFT_Y));
+		}
+}
+
+/* lk.c's tracker on path, on the pyramids the KLT front end builds for this window. */
+static int lk_on_klt_pyramids(enum mvod_lk_path path, const struct mvod_lk_params *p,
+			      const float *from, float *to, uint8_t *ok)
+{
+	struct mvod_klt_cv *k = NULL;
+	struct mvod_lk_level li[4], lj[4];
+	struct mvod_image a = {CW, CH, CW, MVOD_PIX_GREY, img_i};
+	struct mvod_image b = {CW, CH, CW, MVOD_PIX_GREY, img_j};
+	assert_int_equal(mvod_klt_cv_create(CW, CH, p->win, p->levels, 1, &k), 0);
+	assert_int_equal(mvod_klt_cv_push(k, &a), 0);
+	assert_int_equal(mvod_klt_cv_push(k, &b), 0);
+	assert_int_equal(mvod_klt_cv_levels(k, 0, li, 4), p->levels + 1);
+	assert_int_equal(mvod_klt_cv_levels(k, 1, lj, 4), p->levels + 1);
+	int ret = mvod_lk_flow_on(path, li, lj, p, from, to, CN, ok);
+	mvod_klt_cv_destroy(k);
+	return ret;
+}
+
+/*
+ * Every point's status is OpenCV's, on every path this machine has, and where both accept
+ * the positions agree within 1e-4 px (lk.h; measured worst printed: 0 where every sum stays
+ * under 2^24, an exact integer in both, 1.5e-5 px on the corners). With the windows and
+ * levels the KLT front end runs: 21 px on 3 levels (a track without a predicted flow), 9 px on
+ * 3 (the search with one), 21 px on level 0 alone (its refinement). The scene must hold both
+ * verdicts where they are decided, or the equality says little: OpenCV accepts at least a
+ * fifth and rejects at least a fifth of the low-contrast points, rejects every edge point and
+ * accepts at least three quarters of the corner points (counts printed: a 9 px window around a
+ * point 5 px from its corner may hold one edge only).
+ */
+static void test_status_equals_opencv(void **state)
+{
+	(void)state;
+	static const struct mvod_lk_params cfg[] = {{21, 3, 10, 0.03f}, {9, 3, 10, 0.03f},
+						    {21, 0, 10, 0.03f}};
+	static float from[2 * CN], guess[2 * CN], ref[2 * CN], got[2 * CN];
+	static uint8_t st_ref[CN], st_got[CN];
+	static int kind[CN];
+	uint64_t seed = 0x2545f4914f6cdd1du;
+	make_scene(&seed, from, guess, kind);
+	for (size_t c = 0; c < sizeof(cfg) / sizeof(cfg[0]); c++) {
+		const struct mvod_lk_params *p = &cfg[c];
+		memcpy(ref, guess, sizeof(ref));
+		assert_int_equal(lk_opencv_flow(img_i, img_j, CW, CH, CW, p, from, ref, CN, st_ref),
+				 0);
+		int acc[3] = {0}, all[3] = {0};
+		for (int i = 0; i < CN; i++) {
+			acc[kind[i]] += st_ref[i] != 0;
+			all[kind[i]]++;
+		}
+		print_message("win %d, levels %d: OpenCV accepts %d of %d low-contrast, %d of %d "
+			      "edge, %d of %d corner points\n",
+			      p->win, p->levels, acc[0], all[0], acc[1], all[1], acc[2], all[2]);
+		assert_true(5 * acc[0] >= all[0] && 5 * (all[0] - acc[0]) >= all[0]);
+		assert_int_equal(acc[1], 0);
+		assert_true(4 * acc[2] >= 3 * all[2]);
+		for (int path = MVOD_LK_PLAIN; path <= MVOD_LK_AVX2; path++) {
+			memcpy(got, guess, sizeof(got));
+			if (lk_on_klt_pyramids((enum mvod_lk_path)path, p, from, got, st_got) ==
+			    -ENOTSUP)
+				continue;
+			double worst = 0;
+			for (int i = 0; i < CN; i++) {
+				if ((st_got[i] != 0) != (st_ref[i] != 0))
+					fail_msg("win %d, levels %d, path %d, point %d (kind %d at "
+						 "%.2f, %.2f): status %d, OpenCV's %d",
+						 p->win, p->levels, path, i, kind[i], from[2 * i],
+						 from[2 * i + 1], st_got[i], st_ref[i]);
+				if (st_got[i])
+					worst = fmax(worst, hypot(got[2 * i] - ref[2 * i],
+								  got[2 * i + 1] - ref[2 * i + 1]));
+			}
+			print_message("  path %d: every status OpenCV's, positions within %.2g px\n",
+				      path, worst);
+			assert_true(worst <= 1e-4);
+		}
+	}
+}
+#endif
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -324,6 +528,9 @@ int main(void)
 	    cmocka_unit_test(test_flat_fails),
 	    cmocka_unit_test(test_outside_fails),
 	    cmocka_unit_test(test_scharr),
+#ifdef MVOD_HAVE_OPENCV_LK
+	    cmocka_unit_test(test_status_equals_opencv),
+#endif
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

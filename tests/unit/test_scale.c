@@ -1,8 +1,9 @@
 /*
- * Metric scale: the ground-plane fit and the scale filter (src/vo/scale.c) on exact numbers,
- * then --scale height and --scale external through the VO's seam below the detector
- * (src/vo/vo_seam.h), where a test front end projects a fixed cloud of points, ground among
- * them, so that the scale each step should get is known exactly. Runs in milliseconds.
+ * Metric scale: the ground-plane fit (src/vo/geom/ground.c) and the scale filter
+ * (src/vo/core/scale.c) on exact numbers, then --scale height and --scale external through the
+ * VO's seam below the detector (src/vo/vo_seam.h), where a test front end projects a fixed
+ * cloud of points, ground among them, so that the scale each step should get is known
+ * exactly. Runs in milliseconds.
  */
 #include <errno.h>
 #include <math.h>
@@ -538,6 +539,50 @@ static void test_external_odometer(void **state)
 	mvod_vo_destroy(vo);
 }
 
+/*
+ * Map mode, --scale external, the speed starting late: a map built while the robot sent no
+ * speed has the unit of its first two-view step, and its output stays held at the origin
+ * (scale 0) until a measurement; once the odometer runs (frame 8 on), the next keyframe
+ * (frame 14 here) takes its distance over the map's path since (mapscale.c, odo_ratio) and
+ * rescales the map about the origin: the output turns metric, at the truth's position, and
+ * each step after is the truth's 0.5 m. Exact projections and odometer: measured within 2e-7
+ * (float pixels); bound 0.5 %, EXT_RESCALE_MIN (a map closer than that is not rescaled).
+ * Without the fusion the map never learns the unit: scale 0, the pose at the origin to the end.
+ */
+static void test_map_external_speed_late(void **state)
+{
+	(void)state;
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	p.mode = MVOD_VO_MAP;
+	p.frontend = MVOD_FRONTEND_ORB;
+	p.scale_mode = MVOD_SCALE_MODE_EXTERNAL;
+	p.ba_sync = true; /* each keyframe's bundle adjustment lands at the next frame: repeatable */
+	struct mvod_vo *vo = NULL;
+	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
+	struct mvod_vo_result res;
+	double last[3] = {0}, worst = 0;
+	int metric_from = -1;
+	for (int i = 0; i < 20; i++) {
+		mvod_vo_set_odometer(vo, i < 8 ? NAN : 100 + 0.5 * i);
+		res = feed(vo, 0.5 * i, 0, POINTS);
+		assert_int_equal(res.state, i ? MVOD_STATE_TRACKING : MVOD_STATE_INITIALIZING);
+		if (metric_from < 0 && res.scale == 1.0) {
+			metric_from = i;
+			assert_true(fabs(res.pose.t[2] - 0.5 * i) < 0.005 * 0.5 * i);
+		} else if (metric_from >= 0) {
+			assert_true(res.scale == 1.0);
+			assert_int_equal(res.scale_source, MVOD_SCALE_EXTERNAL);
+			worst = fmax(worst, fabs(mvod_vec3_dist(res.pose.t, last) / 0.5 - 1));
+		}
+		memcpy(last, res.pose.t, sizeof(last));
+	}
+	print_message("metric from frame %d, steps then within %.1e of 0.5 m\n", metric_from, worst);
+	assert_true(metric_from >= 8 && metric_from < 19);
+	assert_true(worst < 0.005);
+	mvod_vo_destroy(vo);
+}
+
 int main(void)
 {
 	const struct CMUnitTest tests[] = {
@@ -556,6 +601,7 @@ int main(void)
 		cmocka_unit_test(test_height_from_mount),
 		cmocka_unit_test(test_height_mount_pitch_learnt),
 		cmocka_unit_test(test_external_odometer),
+		cmocka_unit_test(test_map_external_speed_late),
 	};
 	return cmocka_run_group_tests(tests, setup_world, NULL);
 }
