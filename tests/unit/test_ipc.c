@@ -167,6 +167,29 @@ static void assert_pose2_equal(const mvod_pose2_t *m2, int i)
 	assert_true(m2->quality == 0.125f * (float)(i % 9));
 }
 
+/* Both pose messages on their default channels, counted into f->got. */
+struct pose_subs {
+	mvod_pose_t_subscription_t *v1;
+	mvod_pose2_t_subscription_t *v2;
+};
+
+static struct pose_subs subscribe_poses(struct fixture *f)
+{
+	struct pose_subs s = {
+		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, on_pose, &f->got),
+		mvod_pose2_t_subscribe(f->lcm, "MVOD_POSE2", on_pose2, &f->got),
+	};
+	assert_non_null(s.v1);
+	assert_non_null(s.v2);
+	return s;
+}
+
+static void unsubscribe_poses(struct fixture *f, struct pose_subs *s)
+{
+	mvod_pose_t_unsubscribe(f->lcm, s->v1);
+	mvod_pose2_t_unsubscribe(f->lcm, s->v2);
+}
+
 static void publish_poses(struct mvod_ipc *ipc, int n)
 {
 	for (int i = 0; i < n; i++) {
@@ -182,12 +205,7 @@ static void test_pose_roundtrip(void **state)
 	struct fixture *f = *state;
 	struct mvod_ipc *ipc = NULL;
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
-	mvod_pose_t_subscription_t *sub =
-		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, on_pose, &f->got);
-	mvod_pose2_t_subscription_t *sub2 =
-		mvod_pose2_t_subscribe(f->lcm, "MVOD_POSE2", on_pose2, &f->got);
-	assert_non_null(sub);
-	assert_non_null(sub2);
+	struct pose_subs subs = subscribe_poses(f);
 
 	publish_poses(ipc, N_POSES);
 	for (int i = 0; i < 2 * N_POSES; i++)
@@ -201,8 +219,7 @@ static void test_pose_roundtrip(void **state)
 	}
 	assert_int_equal(lcm_handle_timeout(f->lcm, 10), 0);
 
-	mvod_pose_t_unsubscribe(f->lcm, sub);
-	mvod_pose2_t_unsubscribe(f->lcm, sub2);
+	unsubscribe_poses(f, &subs);
 	mvod_ipc_destroy(ipc);
 }
 
@@ -234,10 +251,7 @@ static void test_pose_axis_order(void **state)
 	enum { TURNS = sizeof(turns) / sizeof(turns[0]) };
 	struct mvod_ipc *ipc = NULL;
 	assert_int_equal(mvod_ipc_create_on(f->lcm, NULL, NULL, &ipc), 0);
-	mvod_pose_t_subscription_t *sub =
-		mvod_pose_t_subscribe(f->lcm, MVOD_DEFAULT_POSE_CHANNEL, on_pose, &f->got);
-	mvod_pose2_t_subscription_t *sub2 =
-		mvod_pose2_t_subscribe(f->lcm, "MVOD_POSE2", on_pose2, &f->got);
+	struct pose_subs subs = subscribe_poses(f);
 	for (int i = 0; i < TURNS; i++) {
 		struct mvod_vo_result res = {.state = MVOD_STATE_TRACKING};
 		memcpy(res.pose.R, turns[i].R, sizeof(res.pose.R));
@@ -255,8 +269,7 @@ static void test_pose_axis_order(void **state)
 			assert_float_equal(f->got.poses2[i].orientation[k], want[k], 1e-12);
 		}
 	}
-	mvod_pose_t_unsubscribe(f->lcm, sub);
-	mvod_pose2_t_unsubscribe(f->lcm, sub2);
+	unsubscribe_poses(f, &subs);
 	mvod_ipc_destroy(ipc);
 }
 
