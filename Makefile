@@ -83,11 +83,14 @@ test: deps-test build
 	$(MAKE) --no-print-directory test-asan
 	$(MAKE) --no-print-directory test-fuzz
 
+# The timeouts are set for the release build; AddressSanitizer and UBSan run it 2-3 times slower
+# (integration/synth_vo: 231 s release, over 600 s sanitized on 2 busy cores), hence twice them.
 test-asan: deps-test $(ASANDIR)/build.ninja
 	meson compile -C $(ASANDIR)
 	ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 	UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 \
-		meson test -C $(ASANDIR) --suite unit --suite integration --print-errorlogs
+		meson test -C $(ASANDIR) --suite unit --suite integration --print-errorlogs \
+		--timeout-multiplier 2
 
 # The regression inputs of fuzz/corpus/ and 50000 fuzzing runs from a fixed seed per target, so
 # the result is the same on every machine; skipped without clang. `make fuzz` explores instead.
