@@ -9,9 +9,9 @@
 # Usage: [CASES="charuco chessboard fisheye photos-chessboard photos-charuco"] \
 #            bench/calib.sh [BUILDDIR]
 # Writes CASE.json (the calibration) and CASE.log into OUT (default BUILDDIR/bench-out/calib);
-# renders are cached (bench/lib.sh's render). The real photos' rows are left out, with a note
-# on stderr, when ../shared/data is absent. About a minute (ChArUco detection ~30 ms a view,
-# a chessboard's 100-150 ms).
+# renders are cached (bench/lib.sh's render). Exits 77 (skipped) at a photos case when
+# ../shared/data is absent. About a minute (ChArUco detection ~30 ms a view, a chessboard's
+# 100-150 ms).
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 bench_args "$@"
@@ -60,10 +60,7 @@ for c in ${CASES:-charuco chessboard fisheye photos-chessboard photos-charuco}; 
 		d=$(render calib-fisheye --board "$charuco" "${lens[@]}" --fisheye 0.05,0.01,-0.005,0.001)
 		row "$c" "$charuco" "$d/calib.json" "images:$d/images" --model fisheye ;;
 	photos-*)
-		if [ ! -d "$data/opencv-chessboard" ] || [ ! -d "$data/opencv-charuco" ]; then
-			echo "calib.sh: $c: $data absent, left out" >&2
-			continue
-		fi
+		need "$data/opencv-chessboard" "$data/opencv-charuco"
 		if [ $c = photos-charuco ]; then
 			row "$c" "$charuco" "$data/opencv-charuco/params/tutorial_camera_charuco.yml" \
 				"images:$data/opencv-charuco/calibration_images"
