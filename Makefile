@@ -163,7 +163,7 @@ cross-arm64: build
 	done
 	@file $(ARM64DIR)/test_hamming
 
-# BENCHMARKS.md's tables measured again and checked against the page (bench/run.sh, about 7
+# BENCHMARKS.md's tables measured again and checked against the page (bench/run.sh, about 8
 # minutes): UPDATE=1 rewrites the tables that disagree, LONG=1 adds the long drives, TABLES="kitti
 # calib" measures only those.
 bench: build

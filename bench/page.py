@@ -93,8 +93,12 @@ def main():
     measured = sys.stdin.read().rstrip('\n').split('\n')
     if agree(page, measured, how):
         return 0
+    # Within a tolerance, the diff shows only the lines that disagree.
+    shown = measured
+    if how != 'exact' and len(page) == len(measured):
+        shown = [p if agree([p], [m], how) else m for p, m in zip(page, measured)]
     sys.stdout.writelines(difflib.unified_diff(
-        [l + '\n' for l in page], [l + '\n' for l in measured],
+        [l + '\n' for l in page], [l + '\n' for l in shown],
         f'{path} ({name})', f'measured ({name}, {how})'))
     if what == 'update':
         lines[start:end] = measured
