@@ -10,14 +10,15 @@
 # Usage: bench/run.sh [--update] [--long] [-b BUILDDIR] [TABLE...]
 #   --update  rewrite the tables that disagree in BENCHMARKS.md from the measurement (after a
 #             deliberate change: then review `git diff BENCHMARKS.md` and commit it)
-#   --long    also the long drives (table long: renders of whole KITTI ground truths, 10 minutes
-#             the first time, 3 after); naming a table runs it whatever --long says
-#   TABLE     only these tables (default: every one; a table the headline reads is measured too)
+#   --long    also the long drives (table long: renders of whole KITTI ground truths, 15 minutes
+#             the first time, 2 after); naming a table runs it whatever --long says
+#   TABLE     only these: kitti metric synth datasets instructions headline calib photos speed
+#             long (default: every one; the headline measures the two it reads)
 #   -b DIR    the build (default $BUILDDIR, or build)
 # The reference implementation's column of the speed table needs SIV (a checkout of it, see
 # bench/siv.sh) or MVOD_REF_CMD (bench/fps.sh); without it the column says "-". Outputs go to
-# BUILDDIR/bench-out/ (each table's measurement as NAME.md, its log as NAME.log), mvod-synth
-# renders to BUILDDIR/bench-cache/.
+# BUILDDIR/bench-out/ (each table's measurement, log and diff in tables/NAME.md, .log, .diff;
+# the runs behind it in NAME/), mvod-synth renders to BUILDDIR/bench-cache/.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 update=0 long=0 builddir= want=()
