@@ -15,8 +15,10 @@
 # MVOD_REF_CMD, when set: a command line (split at spaces) run as `COMMAND NN DIR` for each clip,
 # NN = 06 or 07 and DIR = ../shared/data/kitti-odometry-NN-clip (KITTI's layout: sequences/NN,
 # poses/NN.txt); it runs the reference on that clip and prints its frames a second as the last
-# line of its output. The reference is set up outside this repository: nothing here installs
-# or builds it. Prints a markdown table, also written to OUT (default BUILDDIR/bench-out/fps.md).
+# line of its output (and, when it prints one, its accuracy as a line err_avg=E: a line under the
+# table gives it); bench/siv.sh runs the reference that way. The reference is set up outside this
+# repository: nothing here installs or builds it. Prints a markdown table, also written to OUT
+# (default BUILDDIR/bench-out/fps.md); the base column only with BASE.
 set -euo pipefail
 . "$(dirname "$0")/lib.sh"
 s640=0
@@ -43,20 +45,33 @@ fps() {
 		sed -n 's/.*(\([0-9.]*\) fps).*/\1/p'
 }
 
+base=()
+[ -n "${BASE:-}" ] && base=("base default")
 {
 	machine
 	echo
-	echo "| round, clip | default (map) | two-view | base default | reference | default / reference |"
-	echo "|---|--:|--:|--:|--:|--:|"
+	echo "| round, clip | default (map) | two-view |${base:+ ${base[*]} |} reference | default / reference |"
+	echo "|---|--:|--:|${base:+--:|}--:|--:|"
 } | tee "$out"
+declare -A referr=()
 for r in $(seq "${ROUNDS:-3}"); do
 	for c in "${clips[@]}"; do
-		a=$(fps "$mvod") b=$(fps "$mvod" --mode twoview) z=- f=- x=-
-		[ -n "${BASE:-}" ] && z=$(fps "$BASE")
+		a=$(fps "$mvod") b=$(fps "$mvod" --mode twoview) z= f=- x=-
+		[ -n "${BASE:-}" ] && z=" $(fps "$BASE") |"
 		if [ ${#ref[@]} -gt 0 ]; then
-			f=$("${ref[@]}" "$c" "$data/kitti-odometry-$c-clip" | tail -1)
+			o=$("${ref[@]}" "$c" "$data/kitti-odometry-$c-clip")
+			f=$(tail -1 <<<"$o")
+			referr[$c]=$(sed -n 's/^err_avg=//p' <<<"$o")
 			x=$(awk -v a="$a" -v f="$f" 'BEGIN { printf "%.1fx", a / f }')
 		fi
-		echo "| $r, $c | $a | $b | $z | $f | $x |" | tee -a "$out"
+		lab=$c
+		[ $s640 = 1 ] && lab="640x480 street, one core"
+		echo "| $r, $lab | $a | $b |$z $f | $x |" | tee -a "$out"
 	done
 done
+if [ ${#referr[@]} -gt 0 ]; then
+	echo
+	echo -n "The reference's err_avg (ground-truth scale, ../shared/eval.py):"
+	for c in "${clips[@]}"; do echo -n " ${referr[$c]:--} on $c,"; done | sed 's/,$/./'
+	echo
+fi | tee -a "$out"

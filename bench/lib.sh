@@ -99,6 +99,53 @@ bench_row() {
 	"$mvod" bench "$@" >"$file" 2>&1 || echo "mvod bench $* failed: see $file" >&2
 }
 
+# scale_args NAME SCALE: sets sargs to the mvod arguments of SCALE: gt, auto, height
+# (--camera-height $cam_height), external (the exact speed of the ground truth $gt, times from
+# $times when it is KITTI's, written by mkspeedlog into $out/NAME.speed.lcmlog), external-noise
+# (that speed times 1 + 5 % N(0, 1), seed 1) or external-bias (2 % too fast). An external
+# scale needs mkspeedlog (a test tool: meson's tests option): exits 77 without it.
+scale_args() {
+	local log=$out/$1.speed.lcmlog mk=()
+	case $2 in
+	external*)
+		local bin
+		for bin in "$build/tools/mkspeedlog" "$build/tests/mkspeedlog" "$(command -v mkspeedlog)"; do
+			[ -x "$bin" ] && break
+		done
+		need "${bin:-mkspeedlog}"
+		mk=("$bin" "$gt" "$log" ${times:+--times "$times"})
+		case $2 in
+		external-noise) mk+=(--noise 0.05 --seed 1) ;;
+		external-bias) mk+=(--bias 0.02) ;;
+		esac
+		"${mk[@]}" >/dev/null
+		sargs=(--scale external --speed-url "file://$log?mode=r") ;;
+	height) sargs=(--scale height --camera-height "$cam_height") ;;
+	*) sargs=(--scale "$2") ;;
+	esac
+}
+
+# run_bench NAME SCALE ARGS...: bench_row in the background (spawn) of `mvod bench ARGS` with
+# SCALE's arguments (scale_args), extra and a trajectory, into $out/NAME.row and .traj, and
+# NAME appended to runs; with DRAWS="480 500 520", once for each of those --tracks counts
+# (named NAME-tN).
+run_bench() {
+	local name=$1 scale=$2 t tracks run
+	shift 2
+	for t in ${DRAWS:--}; do
+		tracks=() run=$name
+		[ "$t" != - ] && tracks=(--tracks "$t") && run=$name-t$t
+		runs+=("$run")
+		scale_args "$run" "$scale"
+		spawn bench_row "$out/$run.row" "$@" "${sargs[@]}" "${tracks[@]}" \
+			--trajectory "$out/$run.traj" --log-level warn "${extra[@]}"
+	done
+}
+
+# The accuracy columns of the tables (mvod bench's CSV names) and their titles.
+acc_titles="err_avg|RPE rot deg|RPE dir deg|RPE trans %|ATE m|ATE %|scale drift"
+acc_cols=(err_avg rpe_rot_deg rpe_dir_deg rpe_trans_pct ate_m ate_pct scale_drift)
+
 # col FILE NAME: column NAME (as in the CSV header: t_rel_pct, scale_drift, ...) of the last
 # row `mvod bench` printed into FILE; "-" when there is none.
 col() {

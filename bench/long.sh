@@ -1,17 +1,19 @@
 #!/usr/bin/env bash
 # Long drives: `mvod bench` (map mode) along mvod-synth renders of the whole KITTI 06, 07 and 00
 # ground truth in ../shared/data (640x192, KITTI's field of view; 1101, 1101 and 4541 frames), in
-# free scale (auto) and from the camera's height (1.6 m, the synthetic ground's), as BENCHMARKS.md
-# judges accuracy on drives 5-70 times the clips' length. Prints KITTI's t_rel % per run and
-# their mean: one change moves a drive's t_rel by chance (KITTI 00 at --tracks 480/500/520:
-# 4.20/3.01/4.68 %), so judge by the mean over drives and draws (DRAWS below).
+# free scale (auto) and from the camera's height (1.6 m, the synthetic ground's; SCALES as
+# bench/clips.sh's, e.g. external), as BENCHMARKS.md judges accuracy on drives 5-70 times the
+# clips' length (BENCHMARKS.md's "long" table). Prints KITTI's t_rel % per run and their mean:
+# which corners become tracks moves a drive's free-scale t_rel by points (the track cap alone
+# does), so judge a change by the mean over drives and draws (DRAWS below).
 #
 # Usage: [DRIVES="06 07 00"] [SCALES="auto height"] [DRAWS="480 500 520"] [JOBS=2] [FULL=1] \
 #            bench/long.sh [BUILDDIR] [-- BENCH_ARGS...]
 # BENCH_ARGS go to every run. DRAWS: each run once for each of these --tracks counts (named
-# ...-tN), and a second table of each drive and scale's means over them, 3 times the minutes. Renders missing
-# from the cache (see bench/lib.sh) are made first: under a minute each for 06 and 07, 4
-# minutes for 00 (360 MB); then 2 minutes of runs. FULL=1: the drives at KITTI's own size,
+# ...-tN), and a second table of each drive and scale's means over them, 3 times the minutes.
+# Renders missing from the cache (see bench/lib.sh) are made first: on 2 shared cores about 3
+# minutes each for 06 and 07, 10 for 00 (360 MB); then about 5 minutes of runs (auto, height
+# and external). FULL=1: the drives at KITTI's own size,
 # 1240x376 (fx 707), where klt.c's rules for frames 1024 px wide or more apply: a minute each
 # for 06 and 07, 4 for 00 (1.5 GB); then 8 minutes of runs. Writes into OUT (default
 # BUILDDIR/bench-out/long, with FULL=1 long-full), for each run kNN-SCALE[-tN]: .row (mvod
@@ -27,19 +29,12 @@ declare -A dir
 for d in ${DRIVES:-06 07 00}; do
 	dir[$d]=$(drive "$d")
 done
-runs=()
+runs=() cam_height=1.6 times=
 for d in ${DRIVES:-06 07 00}; do
+	gt=${dir[$d]}/gt.tum
 	for scale in ${SCALES:-auto height}; do
-		for t in ${DRAWS:--}; do
-			height=() tracks=() run=k$d-$scale
-			[ "$scale" = height ] && height=(--camera-height 1.6)
-			[ "$t" != - ] && tracks=(--tracks "$t") && run=$run-t$t
-			runs+=("$run")
-			spawn bench_row "$out/$run.row" --source "file:${dir[$d]}/video.mkv" \
-				--calib "${dir[$d]}/calib.json" --gt "${dir[$d]}/gt.tum" \
-				--scale "$scale" "${height[@]}" "${tracks[@]}" \
-				--trajectory "$out/$run.traj" --log-level warn "${extra[@]}"
-		done
+		run_bench "k$d-$scale" "$scale" --source "file:${dir[$d]}/video.mkv" \
+			--calib "${dir[$d]}/calib.json" --gt "$gt"
 	done
 done
 wait
