@@ -175,6 +175,12 @@ extern const char *const mvod_vo_descriptor_flags[];
  * klt otherwise. mvod_vo_create resolves it once; the run loop logs it.
  */
 enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p);
+/*
+ * The one name of the front end p runs, for every log line, summary and table that says it:
+ * "klt", or the descriptor front end by its detector, "orb" or "sift" (mvod_frontend_names
+ * calls the descriptor front end "orb" whatever it detects: a SIFT run logged "front end: orb").
+ */
+const char *mvod_vo_frontend_name(const struct mvod_vo_params *p);
 
 struct mvod_vo_result {
 	struct mvod_pose pose; /* camera-to-world of this frame */

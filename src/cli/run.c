@@ -254,7 +254,7 @@ static void print_summary(const struct mvod_config *c, const struct mvod_run_sum
 {
 	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held, front end %s",
 	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held,
-	       mvod_frontend_names[s->frontend]);
+	       s->frontend);
 	if (s->live)
 		printf(", %lld dropped", (long long)s->dropped);
 	print_skipped(s);

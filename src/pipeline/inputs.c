@@ -194,8 +194,8 @@ int mvod_run_open_inputs(struct run *r)
 		LOG(ERROR, "%s: %s", o->source, err);
 		return ret;
 	}
-	r->sum->frontend = mvod_vo_frontend(&o->vo);
-	LOG(INFO, "front end: %s%s", mvod_frontend_names[r->sum->frontend],
+	r->sum->frontend = mvod_vo_frontend_name(&o->vo);
+	LOG(INFO, "front end: %s%s", r->sum->frontend,
 	    o->vo.frontend == MVOD_FRONTEND_AUTO ? " (--frontend auto)" : "");
 	/*
 	 * A file or dataset is read as fast as it is processed, so waiting for bundle adjustment

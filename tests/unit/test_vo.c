@@ -565,6 +565,26 @@ static void test_run_mode(void **state)
 }
 
 /*
+ * The front end's one name (mvod_vo_frontend_name), which the run's log, its summary and mvod
+ * bench print: klt, or the descriptor front end by its detector; a SIFT run said "orb".
+ */
+static void test_frontend_name(void **state)
+{
+	(void)state;
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	assert_string_equal(mvod_vo_frontend_name(&p), "klt");
+	p.frontend = MVOD_FRONTEND_ORB;
+	assert_string_equal(mvod_vo_frontend_name(&p), "orb");
+	p.detector = MVOD_DETECTOR_SIFT;
+	assert_string_equal(mvod_vo_frontend_name(&p), "sift");
+	p.frontend = MVOD_FRONTEND_AUTO; /* --detector sift asks for descriptors */
+	assert_string_equal(mvod_vo_frontend_name(&p), "sift");
+	p.frontend = MVOD_FRONTEND_KLT;
+	assert_string_equal(mvod_vo_frontend_name(&p), "klt");
+}
+
+/*
  * Quality: inliers against MVOD_QUALITY_INLIERS x min_inliers, clamped to [0, 1], and 0 for
  * every pose that is not tracked: held frames, and rotations before tracking began.
  */
@@ -1095,6 +1115,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_frontend_auto),
 		cmocka_unit_test(test_run_mode),
+		cmocka_unit_test(test_frontend_name),
 		cmocka_unit_test(test_quality),
 		cmocka_unit_test(test_first_frame),
 		cmocka_unit_test(test_few_features_make_no_reference),

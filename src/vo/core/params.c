@@ -107,6 +107,13 @@ enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p)
 	return MVOD_FRONTEND_KLT;
 }
 
+const char *mvod_vo_frontend_name(const struct mvod_vo_params *p)
+{
+	if (mvod_vo_frontend(p) == MVOD_FRONTEND_KLT)
+		return mvod_frontend_names[MVOD_FRONTEND_KLT];
+	return mvod_detector_name(p->detector);
+}
+
 bool mvod_vo_tracked(const struct mvod_vo_result *res)
 {
 	return res->state == MVOD_STATE_TRACKING &&
