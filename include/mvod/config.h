@@ -110,8 +110,9 @@ int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t 
 /*
  * Whether the VO's options fit the mode and front end, each clash -EINVAL naming the options in
  * err (an option would otherwise be silently ignored): --frontend klt with a descriptor
- * option, --tracks where the descriptor front end runs, --mode map with a detector other
- * than ORB (its map keeps ORB descriptors).
+ * option (mvod_vo_descriptor_option), --tracks where the descriptor front end runs, --mode
+ * map with a detector other than ORB (its map keeps ORB descriptors). --features with klt is
+ * no clash: a file may set ORB's count for when it runs; the run warns (pipeline/inputs.c).
  */
 int mvod_config_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen);
 

@@ -233,10 +233,13 @@ static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
 	struct mvod_vo_params p;
 	row_params(base, c, &p);
 	enum mvod_frontend fe = mvod_vo_frontend(&p);
-	const char *const *ignored = fe == MVOD_FRONTEND_KLT ? mvod_vo_descriptor_flags : klt_only;
+	bool klt = fe == MVOD_FRONTEND_KLT;
+	const char *const *ignored = klt ? mvod_vo_descriptor_flags : klt_only;
 	int n = 0;
 	for (int i = 0; i + 1 < c->n; i += 2) {
-		if (in_list(c->args[i] + 2, ignored))
+		/* klt reads neither the descriptor options nor ORB's and SIFT's count, --features */
+		const char *key = c->args[i] + 2;
+		if (in_list(key, ignored) || (klt && strcmp(key, "features") == 0))
 			continue;
 		memmove(c->args[n++], c->args[i], sizeof(c->args[0]));
 		memmove(c->args[n++], c->args[i + 1], sizeof(c->args[0]));

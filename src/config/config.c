@@ -9,6 +9,7 @@
 #include <ini.h>
 #include <lcm/lcm.h>
 
+#include "mvod/vo_types.h"
 #include "util/body_frame.h"
 #include "util/errbuf.h"
 #include "util/input.h"
@@ -469,6 +470,44 @@ static const char *unprintable(const struct mvod_config_key *k, const char *valu
 	return NULL;
 }
 
+static int key_of_flag(const char *flag)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++)
+		if (strcmp(mvod_config_keys[k].flag, flag) == 0)
+			return k;
+	return -1;
+}
+
+/*
+ * After frontend = auto, which front end that runs and why, as an INI comment (the key stays
+ * auto when the printout is read back, and keeps choosing): "  ; runs klt: none of detector,
+ * matcher, ratio, best (orb and sift only) set", or "  ; runs orb: matcher = flann (...) set".
+ */
+static void frontend_note(const struct mvod_config *c, const struct mvod_config_key *k,
+			  char *buf, size_t len)
+{
+	const struct mvod_vo_params *p = &c->run.vo;
+	buf[0] = '\0';
+	if (k->offset != AT(run.vo.frontend) || p->frontend != MVOD_FRONTEND_AUTO)
+		return;
+	const char *opt = mvod_vo_descriptor_option(p);
+	int used = snprintf(buf, len, "  ; runs %s: ", mvod_vo_frontend_name(p));
+	if (used < 0 || (size_t)used >= len)
+		return;
+	if (opt) {
+		char value[64];
+		format_value(c, &mvod_config_keys[key_of_flag(opt)], value, sizeof(value));
+		snprintf(buf + used, len - (size_t)used, "%s = %s (orb and sift only) set", opt, value);
+		return;
+	}
+	used += snprintf(buf + used, len - (size_t)used, "none of ");
+	for (int i = 0; mvod_vo_descriptor_flags[i] && (size_t)used < len; i++)
+		used += snprintf(buf + used, len - (size_t)used, "%s%s", i ? ", " : "",
+				 mvod_vo_descriptor_flags[i]);
+	if ((size_t)used < len)
+		snprintf(buf + used, len - (size_t)used, " (orb and sift only) set");
+}
+
 int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t errlen)
 {
 	const char *section = "";
@@ -485,8 +524,10 @@ int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t 
 			fprintf(out, "%s[%s]\n", i ? "\n" : "", k->section);
 		section = k->section;
 		bool derived = k->derived && !(c->set & (1ULL << i));
-		fprintf(out, "%s%s =%s%s%s\n", derived ? "# " : "", k->key, *value ? " " : "", value,
-			derived ? "  (not set: follows other keys; uncomment to fix it)" : "");
+		char note[160];
+		frontend_note(c, k, note, sizeof(note));
+		fprintf(out, "%s%s =%s%s%s%s\n", derived ? "# " : "", k->key, *value ? " " : "", value,
+			derived ? "  (not set: follows other keys; uncomment to fix it)" : "", note);
 	}
 	return ferror(out) ? mvod_errf(err, errlen, -EIO, "write error") : 0;
 }
