@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "mvod/calibrate.h"
 #include "mvod/log.h"
 #include "util/errbuf.h"
 
@@ -19,6 +20,11 @@ static int open_camera(struct run *r)
 			LOG(ERROR, "calibration: %s", err);
 		if (ret)
 			return ret;
+		const char *good = mvod_calib_verdict_name(MVOD_VERDICT_GOOD);
+		if (r->cam.verdict[0] && strcmp(r->cam.verdict, good) != 0)
+			LOG(WARN, "calibration %s was judged \"%s\" by mvod calibrate: the poses may "
+				  "be off; calibrate again (mvod calibrate --help)", o->calib,
+			    r->cam.verdict);
 	} else if (mvod_source_camera(r->src, &r->cam) != 0) {
 		LOG(ERROR, "%s carries no camera intrinsics: pass --calib FILE (mvod JSON or KITTI "
 			   "calib.txt)", o->source);

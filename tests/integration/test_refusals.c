@@ -170,6 +170,41 @@ static void test_features_keep_klt(void **state)
 		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
 }
 
+/*
+ * mvod run warns once at start when --calib records a verdict of mvod calibrate's other than
+ * good: a "not one camera" file (mvod calibrate --force, or an mvod that wrote every verdict)
+ * ran without a word. The run goes on (exit 0); a good verdict, or none, says nothing.
+ */
+static void test_calibration_verdict(void **state)
+{
+	(void)state;
+	static const char *const verdicts[] = {"not one camera", "too few views", "good"};
+	char text[8192];
+	harness_read_file(calib, text, sizeof(text));
+	assert_null(strstr(text, "verdict")); /* mvod-synth's file records none */
+	for (int i = 0; i < 3; i++) {
+		char path[300], edited[8400], want[600];
+		snprintf(path, sizeof(path), "%s/verdict%d.json", harness_tmpdir(), i);
+		snprintf(edited, sizeof(edited), "{\"verdict\": \"%s\", %s", verdicts[i],
+			 strchr(text, '{') + 1);
+		harness_write_file(path, edited);
+		snprintf(want, sizeof(want), "mvod: warn: calibration %s was judged \"%s\" by mvod "
+			 "calibrate: the poses may be off; calibrate again (mvod calibrate --help)\n",
+			 path, verdicts[i]);
+		char *argv[] = {(char *)harness_bin("MVOD"), "--no-lcm", "--source", video,
+				"--calib", path, NULL};
+		struct run_result r;
+		assert_int_equal(harness_run(argv, &r), 0);
+		if (!r.exited || r.status != 0)
+			fail_msg("exit %d: %s", r.status, r.err);
+		const char *w = strstr(r.err, want);
+		if (i < 2 && (!w || strstr(w + strlen(want), "was judged")))
+			fail_msg("not one \"%s\" in: %s", want, r.err);
+		if (i == 2 && strstr(r.err, "judged"))
+			fail_msg("a good calibration warned: %s", r.err);
+	}
+}
+
 /* A calibration file saved by a Windows editor starts with a byte order mark: it is read. */
 static void test_bom(void **state)
 {
@@ -266,6 +301,7 @@ int main(void)
 		cmocka_unit_test(test_image_too_small),
 		cmocka_unit_test(test_option_clashes),
 		cmocka_unit_test(test_features_keep_klt),
+		cmocka_unit_test(test_calibration_verdict),
 		cmocka_unit_test(test_bom),
 		cmocka_unit_test(test_empty_calibration),
 		cmocka_unit_test(test_out_of_memory),
