@@ -117,5 +117,6 @@ int mvod_cmd_convert(int argc, char **argv);
 int mvod_cmd_view(int argc, char **argv);
 int mvod_cmd_bench(int argc, char **argv);
 int mvod_cmd_mount(int argc, char **argv);
+int mvod_cmd_speed_log(int argc, char **argv);
 
 #endif

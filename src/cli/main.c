@@ -18,6 +18,7 @@ static const struct command commands[] = {
 	{"calib-convert", mvod_cmd_convert},
 	{"view", mvod_cmd_view},
 	{"bench", mvod_cmd_bench},
+	{"speed-log", mvod_cmd_speed_log},
 };
 
 /*

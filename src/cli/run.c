@@ -98,7 +98,8 @@ static void usage(FILE *out)
 "Usage: mvod [run] --source URI [options]\n"
 "       mvod [run] --config FILE [options]\n"
 "       mvod --list-cameras\n"
-"       mvod calibrate|mount|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
+"       mvod calibrate|mount|board|calib-convert|bench|view|speed-log ...\n"
+"                                                   (mvod COMMAND --help)\n"
 "Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
 "\n");
 	cli_usage_input(out);
@@ -129,6 +130,7 @@ static void usage(FILE *out)
 "  calib-convert IN OUT  convert OpenCV/ROS/KITTI calibration files to mvod JSON\n"
 "  bench                 measure accuracy and speed against ground truth\n"
 "  view                  draw the path, heading, state and rates of a running mvod\n"
+"  speed-log GT OUT      an LCM log of the speed along a ground truth (--scale external)\n"
 "\n"
 "Examples:\n"
 "  mvod --source 'v4l2:/dev/video0?width=640&height=480&fps=30&format=YUYV' \\\n"
