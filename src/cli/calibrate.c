@@ -14,8 +14,8 @@
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "calibrate");
 	fprintf(out,
-"Usage: mvod calibrate --source URI --board SPEC --out calib.json [options]\n"
 "Finds a calibration board in every frame of a recording, picks the views that best cover\n"
 "the image and the range of board tilts, calibrates the camera, drops views whose error is\n"
 "far above the rest and calibrates again, and writes mvod JSON (mvod-calibration/1).\n"

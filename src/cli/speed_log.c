@@ -19,8 +19,8 @@
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "speed-log");
 	fprintf(out,
-"Usage: mvod speed-log GT OUT.lcmlog [--times FILE] [options]\n"
 "Writes the speed a robot's wheels would report along the ground-truth path GT, one\n"
 "mvod.speed_t per pose from the second, into the LCM log OUT, for mvod --scale external\n"
 "--speed-url 'file://OUT?mode=r' (or lcm-logplayer OUT): utime = the pose's time in\n"
@@ -31,7 +31,8 @@ static void usage(FILE *out)
 "\n"
 "  --times FILE          a KITTI sequence's times.txt (seconds, one per pose): needed for a\n"
 "                        KITTI GT, refused with TUM\n"
-"  --channel NAME        LCM channel (default " MVOD_DEFAULT_SPEED_CHANNEL ", mvod's --speed-channel)\n"
+"  --channel NAME        LCM channel (default " MVOD_DEFAULT_SPEED_CHANNEL
+", mvod's --speed-channel)\n"
 "  --no-distance         speed only (has_distance false): mvod integrates it\n"
 "  --noise F             a real odometer: each step's distance times (1 + F g), g a standard\n"
 "                        normal per message, F in [0, 1] (default 0)\n"
