@@ -75,14 +75,29 @@ static void expect_path(const char *path, int64_t t0_us, const char *channel, bo
 	assert_true(m[0].distance == 3.0 && m[1].distance == 7.0);
 }
 
+/* The path as TUM and KITTI, KITTI's times (times_text) and an OUT, named NAME.* in the tmp dir. */
+struct inputs {
+	char tum[300], kitti[300], times[300], out[300];
+};
+
+static void write_inputs(struct inputs *in, const char *name, const char *times_text)
+{
+	const char *dir = harness_tmpdir();
+	snprintf(in->tum, sizeof(in->tum), "%s/%s.tum", dir, name);
+	snprintf(in->kitti, sizeof(in->kitti), "%s/%s.kitti", dir, name);
+	snprintf(in->times, sizeof(in->times), "%s/%s.times.txt", dir, name);
+	snprintf(in->out, sizeof(in->out), "%s/%s.lcmlog", dir, name);
+	harness_write_file(in->tum, TUM_POSES);
+	harness_write_file(in->kitti, KITTI_POSES);
+	harness_write_file(in->times, times_text);
+}
+
 static void test_tum_and_kitti(void **state)
 {
 	(void)state;
-	const char *tum = harness_tmp_path("gt.tum"), *kitti = harness_tmp_path("gt.kitti");
-	const char *times = harness_tmp_path("times.txt"), *out = harness_tmp_path("speed.lcmlog");
-	harness_write_file(tum, TUM_POSES);
-	harness_write_file(kitti, KITTI_POSES);
-	harness_write_file(times, "0.0\n0.5\n1.5\n");
+	struct inputs in;
+	write_inputs(&in, "gt", "0.0\n0.5\n1.5\n");
+	const char *tum = in.tum, *kitti = in.kitti, *times = in.times, *out = in.out;
 	char want[600];
 	snprintf(want, sizeof(want), "mvod speed-log: wrote 2 mvod.speed_t on MVOD_SPEED to %s, "
 		 "10.500 s to 11.500 s\n", out);
@@ -110,11 +125,9 @@ static void test_tum_and_kitti(void **state)
 static void test_refusals(void **state)
 {
 	(void)state;
-	const char *tum = harness_tmp_path("r.tum"), *kitti = harness_tmp_path("r.kitti");
-	const char *times = harness_tmp_path("r_times.txt"), *out = harness_tmp_path("r.lcmlog");
-	harness_write_file(tum, TUM_POSES);
-	harness_write_file(kitti, KITTI_POSES);
-	harness_write_file(times, "0.0\n0.5\n");
+	struct inputs in;
+	write_inputs(&in, "r", "0.0\n0.5\n"); /* a time short */
+	const char *tum = in.tum, *kitti = in.kitti, *times = in.times, *out = in.out;
 	harness_write_file(out, "the run before");
 	speed_log(2, "is KITTI: its poses carry no times: pass the sequence's --times times.txt",
 		  kitti, out, NULL);
