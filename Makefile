@@ -131,7 +131,7 @@ demo: build
 	@echo
 	@echo "demo: trajectory  $(DEMODIR)/trajectory.tum (TUM: t x y z qx qy qz qw)"
 	@echo "demo: plot        $(DEMODIR)/trajectory.png"
-	@echo "demo: LCM log     $(DEMODIR)/mvod.lcmlog (mvod.pose_t on MVOD_POSE, mvod.status_t on MVOD_STATUS)"
+	@echo "demo: LCM log     $(DEMODIR)/mvod.lcmlog (mvod.pose2_t on MVOD_POSE2, mvod.status2_t on MVOD_STATUS2)"
 	@echo "demo: viewer      $(DEMODIR)/view.png (mvod view of that log: path, heading, state, rates)"
 	@echo "demo: input       $(DEMODIR)/synth/ (video.mkv, calib.json, gt.tum, gt.kitti)"
 

@@ -8,27 +8,27 @@
 #     uptime_s are timings, and periodic status messages come at wall-clock moments.
 #   - mvod bench CSV: every column except fps and the *_ms timing columns.
 #
-# Usage: bench/identical.sh OLD_MVOD NEW_MVOD [MVOD_SYNTH [MKSPEEDLOG]]
+# Usage: bench/identical.sh OLD_MVOD NEW_MVOD [MVOD_SYNTH]
 #   e.g. bench/identical.sh ../main/build/mvod build/mvod
 # Inputs: the KITTI 06 and 07 clips in ../shared/data (skipped when absent) and short
 # mvod-synth sequences. On each input: the default run (LCM log, plot), --scale gt, mvod
 # bench, and the matrix of both modes (map, twoview) x both front ends (klt, orb) x every scale
 # mode (auto, gt, height, external: the ground truth's speed through a file:// LCM log made
-# by MKSPEEDLOG, default build/tests/mkspeedlog beside NEW_MVOD; the external rows are skipped
-# without it); then two-view with SIFT and with FLANN on the turn. MATRIX=0 runs only the
+# by NEW_MVOD speed-log, the same log for both binaries; the external rows are skipped when
+# NEW_MVOD has no speed-log); then two-view with SIFT and with FLANN on the turn. MATRIX=0 runs only the
 # default rows. Outputs go to a temporary folder, removed at the end unless KEEP=1. Prints one
 # line per comparison and exits 1 when any output differs.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 synth=${3:-$(dirname "$2")/tools/mvod-synth}
-speedlog=${4:-$(dirname "$2")/tests/mkspeedlog}
 data=${MVOD_DATA:-$root/../shared/data}
 work=$(mktemp -d)
 [ "${KEEP:-0}" = 1 ] && echo "outputs in $work" || trap 'rm -rf "$work"' EXIT
 # Copies, so that a rebuild during the run does not swap a binary under it.
 cp "$1" "$work/mvod.old" && cp "$2" "$work/mvod.new" && cp "$synth" "$work/mvod-synth"
 old=$work/mvod.old new=$work/mvod.new synth=$work/mvod-synth
-[ -x "$speedlog" ] && cp "$speedlog" "$work/mkspeedlog" && speedlog=$work/mkspeedlog || speedlog=
+speedlog=
+"$new" speed-log --help >/dev/null 2>&1 && speedlog=$new
 fail=0
 
 # Decodes an LCM log into what must not change (see above), one line per item.
@@ -151,7 +151,7 @@ speed_url() {
 	[ -n "$speedlog" ] || return 0
 	local log=$work/$1.speed.lcmlog
 	shift
-	"$speedlog" "$@" "$log" >/dev/null && echo "file://$log?mode=r"
+	"$speedlog" speed-log "$@" "$log" >/dev/null && echo "file://$log?mode=r"
 }
 
 # Two short street sequences: the turn (rotation and translation) as video, the forward path

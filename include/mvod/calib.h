@@ -41,6 +41,12 @@ struct mvod_camera {
 	 */
 	bool has_mount;
 	double mount_height_m, mount_pitch_deg, mount_roll_deg;
+	/*
+	 * mvod calibrate's verdict on these intrinsics when the file records one (mvod JSON's
+	 * "verdict": "good", "too few views", "not one camera", ...), else "": mvod run warns
+	 * at start on any but good.
+	 */
+	char verdict[32];
 };
 
 /* Largest mount height taken, metres: above any robot or car; the same bound as --camera-height. */

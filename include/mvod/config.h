@@ -1,6 +1,9 @@
 /*
  * mvod's settings: one table of keys drives the INI file (/etc/mvod/mvod.conf, libinih), the
- * command-line flags of `mvod run` and `mvod --print-config`, so the three cannot drift apart.
+ * command-line flags of `mvod run`, `mvod --print-config`, and the option reference (--help,
+ * --help-all, the man page mvod(1)), so none can drift from another. A second table holds the
+ * command line's options that are no setting (--config, --help, ...), for the parser and the
+ * reference alike.
  */
 #ifndef MVOD_CONFIG_H
 #define MVOD_CONFIG_H
@@ -63,10 +66,40 @@ struct mvod_config_key {
 	const char *const *choices; /* enums, NULL-terminated, in enum order */
 	/* strings: what a value must be beyond its length: 0, or -EINVAL with what it takes */
 	int (*check)(const char *text, char *err, size_t errlen);
+	/*
+	 * The reference: the flag's value as named there ("N", "FILE"; NULL for an enum, whose
+	 * choices name it, and a bool), a one-line summary (--help), the rest (--help-all and
+	 * mvod(1), after the summary; may be NULL), and what the default means where the value
+	 * alone does not say it (an empty string's, a derived key's; NULL: the value, "none").
+	 */
+	const char *arg, *summary, *help, *dflt;
 };
 
 extern const struct mvod_config_key mvod_config_keys[];
 extern const int mvod_config_nkeys;
+
+/* The command line's options that are no setting, by index into mvod_config_flags. */
+enum mvod_config_flag_id {
+	MVOD_FLAG_CONFIG,
+	MVOD_FLAG_PRINT_CONFIG,
+	MVOD_FLAG_LIST_CAMERAS,
+	MVOD_FLAG_HELP,
+	MVOD_FLAG_HELP_ALL,
+	MVOD_FLAG_MAN,
+	MVOD_FLAG_VERSION,
+	MVOD_FLAG_COUNT,
+};
+
+struct mvod_config_flag {
+	const char *flag;   /* long option, without "--" */
+	char short_flag;    /* or 0 */
+	const char *arg;    /* its value's name, or NULL for none */
+	bool every_command; /* every subcommand takes it (--help, --version); else mvod run only */
+	const char *group;  /* the reference's heading it comes under ("General", ...) */
+	const char *summary, *help; /* as a key's */
+};
+
+extern const struct mvod_config_flag mvod_config_flags[MVOD_FLAG_COUNT];
 
 /* Defaults: those of mvod_run_opts_default and the comments above. */
 void mvod_config_default(struct mvod_config *c);
@@ -100,6 +133,9 @@ void mvod_config_finish(struct mvod_config *c);
 /* Sets the log level from [log] level and quiet. */
 void mvod_config_apply_log(const struct mvod_config *c);
 
+/* Key k's value in c as --print-config writes it ("" for no string), into buf. */
+void mvod_config_value_text(const struct mvod_config *c, int k, char *buf, size_t len);
+
 /*
  * Writes c as an INI file that parses back to the same settings; a derived key not given is
  * written as a comment ("# format = tum"). A value INI cannot carry
@@ -110,8 +146,9 @@ int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t 
 /*
  * Whether the VO's options fit the mode and front end, each clash -EINVAL naming the options in
  * err (an option would otherwise be silently ignored): --frontend klt with a descriptor
- * option, --tracks where the descriptor front end runs, --mode map with a detector other
- * than ORB (its map keeps ORB descriptors).
+ * option (mvod_vo_descriptor_option), --tracks where the descriptor front end runs, --mode
+ * map with a detector other than ORB (its map keeps ORB descriptors). --features with klt is
+ * no clash: a file may set ORB's count for when it runs; the run warns (pipeline/inputs.c).
  */
 int mvod_config_check_frontend(const struct mvod_vo_params *p, char *err, size_t errlen);
 

@@ -6,8 +6,11 @@
 #ifndef MVOD_SPEED_H
 #define MVOD_SPEED_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "mvod/geom.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -57,6 +60,36 @@ struct mvod_speed_counts {
 	int64_t last_bad_utime; /* the utime of the last one refused for its time */
 };
 void mvod_speed_counts(const struct mvod_speed *s, struct mvod_speed_counts *c);
+
+/*
+ * Writing (mvod speed-log): the speed a robot's wheels would report along a known path, as an
+ * LCM log of mvod.speed_t, for --scale external without a robot (benchmarks, tests). The
+ * message of pose i (from the second) has utime = t[i] in microseconds, speed = the distance
+ * from pose i-1 over the time between, distance = the path length so far.
+ */
+struct mvod_speed_log_opts {
+	const char *channel; /* MVOD_DEFAULT_SPEED_CHANNEL */
+	long samples;        /* write only the first this many messages (speed that stops); -1: all */
+	long from;           /* write none before message `from` (0-based: speed that starts late) */
+	bool no_distance;    /* leave has_distance false: mvod integrates the speed */
+	/*
+	 * A real odometer: each step's distance times (1 + bias) and times (1 + noise g), g a
+	 * standard normal drawn per message from a fixed 64-bit LCG seeded by seed, so a run
+	 * repeats on every machine; the speed and the distance follow from those steps.
+	 */
+	double noise, bias;
+	uint64_t seed; /* 1 */
+};
+void mvod_speed_log_opts_default(struct mvod_speed_log_opts *o);
+/*
+ * Writes the n poses' (times t in seconds, positions pose[i].t in metres) messages to path,
+ * through the output policy (util/output.h: an input of this process is refused; a regular
+ * file is replaced only once the first event is written), each event stamped with its
+ * message's utime. t must increase. Returns the number of messages written, or -errno with a
+ * reason in err.
+ */
+int mvod_speed_log_write(const char *path, int n, const double *t, const struct mvod_pose *pose,
+			 const struct mvod_speed_log_opts *o, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

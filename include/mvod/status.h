@@ -85,7 +85,7 @@ struct mvod_run_summary {
 	 * the policy refuses). An edit fixes it, a restart does not (the daemon's exit status 2).
 	 */
 	bool config_failed;
-	enum mvod_frontend frontend; /* the front end that ran: --frontend auto resolved */
+	const char *frontend; /* the front end that ran, by mvod_vo_frontend_name: klt, orb, sift */
 	bool live;       /* frames came through the capture thread */
 	/* frames a live source produced that were not processed, the skipped ones apart */
 	int64_t dropped;

@@ -137,7 +137,7 @@ struct mvod_vo_params {
 	int blur_ksize;         /* Gaussian blur kernel in pixels (odd), 0 = off. 0 */
 	enum mvod_frontend frontend; /* AUTO */
 	enum mvod_detector detector; /* ORB; the descriptor front end's */
-	int max_features;       /* feature cap of the descriptor front end. 2000 */
+	int max_features;       /* ORB's or SIFT's feature cap (not klt's: max_tracks). 2000 */
 	int max_tracks;         /* track cap of the KLT front end. 500 */
 	enum mvod_matcher_kind matcher; /* BF */
 	double ratio;           /* Lowe's ratio test threshold (matchers with one); >= 1 = off. 0.8 */
@@ -161,20 +161,27 @@ struct mvod_vo_params {
 void mvod_vo_params_default(struct mvod_vo_params *p);
 
 /*
- * The flag of the first option only the descriptor front end reads (detector, matcher,
- * features, ratio, best) whose value in p is not its default, or NULL when all are defaults.
- * Compared by value, not by whether it was given, since a file written by --print-config
- * gives every key.
+ * The flag of the first option that asks for the descriptor front end (detector, matcher,
+ * ratio, best: what klt has no counterpart of) whose value in p is not its default, or NULL
+ * when all are defaults. Not --features, the ORB and SIFT detectors' count, which picks no
+ * front end (klt's budget is --tracks). Compared by value, not by whether it was given, since
+ * a file written by --print-config gives every key.
  */
 const char *mvod_vo_descriptor_option(const struct mvod_vo_params *p);
 /* Those options' flags, NULL-terminated. */
 extern const char *const mvod_vo_descriptor_flags[];
 /*
- * The front end p runs: p->frontend, or for AUTO, orb in map mode (which matches its points by
- * descriptor) or when a descriptor option is not its default (the user asked for descriptors),
- * klt otherwise. mvod_vo_create resolves it once; the run loop logs it.
+ * The front end p runs: p->frontend, or for AUTO, orb when mvod_vo_descriptor_option names an
+ * option (the user asked for descriptors), klt otherwise. mvod_vo_create resolves it once;
+ * the run loop logs it.
  */
 enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p);
+/*
+ * The one name of the front end p runs, for every log line, summary and table that says it:
+ * "klt", or the descriptor front end by its detector, "orb" or "sift" (mvod_frontend_names
+ * calls the descriptor front end "orb" whatever it detects: a SIFT run logged "front end: orb").
+ */
+const char *mvod_vo_frontend_name(const struct mvod_vo_params *p);
 
 struct mvod_vo_result {
 	struct mvod_pose pose; /* camera-to-world of this frame */

@@ -86,6 +86,20 @@ static int json_mount(const cJSON *root, struct mvod_camera *c, char *err, size_
 	return 0;
 }
 
+/* The optional "verdict" of mvod calibrate, kept for mvod run's warning. */
+static int json_verdict(const cJSON *root, struct mvod_camera *c, char *err, size_t errlen)
+{
+	const cJSON *v = cJSON_GetObjectItemCaseSensitive(root, "verdict");
+	if (!v || cJSON_IsNull(v))
+		return 0;
+	if (!cJSON_IsString(v) || strlen(v->valuestring) >= sizeof(c->verdict))
+		return mvod_errf(err, errlen, -EINVAL, "\"verdict\" must be mvod calibrate's verdict, "
+				 "a string such as \"good\" (at most %zu characters)",
+				 sizeof(c->verdict) - 1);
+	snprintf(c->verdict, sizeof(c->verdict), "%s", v->valuestring);
+	return 0;
+}
+
 static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, size_t errlen)
 {
 	struct mvod_camera c = {0};
@@ -135,6 +149,7 @@ static int json_camera(const cJSON *root, struct mvod_camera *cam, char *err, si
 		c.focus = focus->valuedouble;
 	}
 	ret = json_mount(root, &c, err, errlen);
+	ret = ret ? ret : json_verdict(root, &c, err, errlen);
 	if (!ret)
 		*cam = c;
 out:
@@ -357,8 +372,10 @@ static void meta_to_json(cJSON *root, const struct mvod_camera *cam,
 		cJSON_AddItemToObject(sd, "fx_fy_cx_cy", number_row(meta->std_K, 4));
 		cJSON_AddItemToObject(sd, "distortion", number_row(meta->std_dist, cam->n_dist));
 	}
-	if (meta->verdict[0])
-		cJSON_AddStringToObject(root, "verdict", meta->verdict);
+	/* A file converted from mvod JSON keeps the verdict it recorded. */
+	const char *verdict = meta->verdict[0] ? meta->verdict : cam->verdict;
+	if (verdict[0])
+		cJSON_AddStringToObject(root, "verdict", verdict);
 	if (meta->board[0])
 		cJSON_AddStringToObject(root, "board", meta->board);
 	if (meta->source[0])

@@ -8,8 +8,7 @@
 int mvod_lcam_open(const struct mvod_lcam_want *want, struct mvod_lcam **out,
 		   struct mvod_lcam_mode *mode, char *err, size_t errlen)
 {
-	return mvod_errf(err, errlen, -ENOTSUP, "this mvod was built without libcamera: install "
-			 "libcamera-dev and rebuild (meson setup -Dlibcamera=enabled)");
+	return mvod_errf(err, errlen, -ENOTSUP, "%s", MVOD_LCAM_NOT_BUILT);
 }
 
 int mvod_lcam_wait(struct mvod_lcam *c, int timeout_ms, struct mvod_lcam_frame *f)
@@ -28,5 +27,5 @@ void mvod_lcam_close(struct mvod_lcam *c)
 
 int mvod_lcam_list(FILE *out)
 {
-	return 0;
+	return -ENOTSUP;
 }

@@ -51,8 +51,15 @@ int mvod_lcam_wait(struct mvod_lcam *c, int timeout_ms, struct mvod_lcam_frame *
 int mvod_lcam_release(struct mvod_lcam *c);
 /* NULL is a no-op. */
 void mvod_lcam_close(struct mvod_lcam *c);
-/* Prints the cameras (index, id, model) with their --source URIs; returns how many. */
+/*
+ * Prints the cameras (index, id, model) with their --source URIs; returns how many, or
+ * -ENOTSUP in a build without libcamera (libcamera_none.c), which lists nothing.
+ */
 int mvod_lcam_list(FILE *out);
+/* What a build without libcamera says of the libcamera: backend: why, and what to do. */
+#define MVOD_LCAM_NOT_BUILT                                                                         \
+	"this mvod was built without libcamera: install libcamera-dev and rebuild (meson setup "   \
+	"-Dlibcamera=enabled)"
 
 /* Parses the location of a libcamera: URI ("0", "/base/...imx219@10?width=640"). */
 int mvod_lcam_parse(const char *location, struct mvod_lcam_want *want, char *err, size_t errlen);

@@ -24,11 +24,19 @@ const struct mvod_source_ops *const mvod_source_backends[] = {
 	NULL,
 };
 
+/*
+ * A build without libcamera lists no CSI camera: it says so, rather than "no libcamera
+ * camera", which read as if libcamera had looked.
+ */
 int mvod_capture_list_cameras(FILE *out)
 {
 	int n = mvod_v4l2_list(out);
-	n += mvod_lcam_list(out);
-	if (n == 0)
+	int lcam = mvod_lcam_list(out);
+	n += lcam > 0 ? lcam : 0;
+	const char *none = n ? "" : "No cameras found: no V4L2 capture device in /dev/video*; ";
+	if (lcam == -ENOTSUP)
+		fprintf(out, "%slibcamera cameras cannot be listed: %s\n", none, MVOD_LCAM_NOT_BUILT);
+	else if (n == 0)
 		fprintf(out, "No cameras found: no V4L2 capture device in /dev/video*, and no "
 			     "libcamera camera.\n");
 	return n;

@@ -49,8 +49,8 @@ static const char default_grid[] =
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "bench");
 	fprintf(out,
-"Usage: mvod bench --source URI [--gt FILE] [options] [--sweep [GRID]]\n"
 "Runs the pipeline (no LCM) against ground truth and prints one table row per configuration:\n"
 "detector (klt for the klt front end), matcher, feature cap (klt: track cap), image scale,\n"
 "blur, ratio, mode; err_avg and err_max (issue 5's\n"
@@ -64,11 +64,10 @@ static void usage(FILE *out)
 "beside sequences/NN, kitti-raw: with oxts/data/, euroc:, tum: RGB-D with\n"
 "groundtruth.txt).\n"
 "\n");
-	cli_usage_input(out);
-	cli_usage_vo(out);
-	fprintf(out, "Output (a single configuration, not --sweep):\n");
-	cli_usage_files(out);
+	cli_usage_options(out, CLI_SCOPE_BENCH);
 	fprintf(out,
+"The Output group's files are a single configuration's, not --sweep's; mvod --help-all\n"
+"describes every option.\n"
 "\n"
 "Benchmark:\n"
 "  --sweep [GRID]        run a grid of configurations, one fresh process each, one after\n"
@@ -90,7 +89,6 @@ static void usage(FILE *out)
 "  --plots DIR           PNGs: path-top.png, path-side.png and errors.png (e, r, d per\n"
 "                        frame); with --sweep, sweep.png (err_avg against frame time)\n"
 "\n");
-	cli_usage_general(out);
 	fprintf(out,
 "Examples:\n"
 "  mvod bench --source kitti:data/sequences/07 --scale gt    (data/poses/07.txt)\n"
@@ -233,10 +231,13 @@ static int fit_frontend(const struct mvod_vo_params *base, struct config *c)
 	struct mvod_vo_params p;
 	row_params(base, c, &p);
 	enum mvod_frontend fe = mvod_vo_frontend(&p);
-	const char *const *ignored = fe == MVOD_FRONTEND_KLT ? mvod_vo_descriptor_flags : klt_only;
+	bool klt = fe == MVOD_FRONTEND_KLT;
+	const char *const *ignored = klt ? mvod_vo_descriptor_flags : klt_only;
 	int n = 0;
 	for (int i = 0; i + 1 < c->n; i += 2) {
-		if (in_list(c->args[i] + 2, ignored))
+		/* klt reads neither the descriptor options nor ORB's and SIFT's count, --features */
+		const char *key = c->args[i] + 2;
+		if (in_list(key, ignored) || (klt && strcmp(key, "features") == 0))
 			continue;
 		memmove(c->args[n++], c->args[i], sizeof(c->args[0]));
 		memmove(c->args[n++], c->args[i + 1], sizeof(c->args[0]));

@@ -20,8 +20,8 @@
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "board");
 	fprintf(out,
-"Usage: mvod board --board SPEC --out board.png [--dpi N]\n"
 "Writes a printable calibration target at its exact physical size: each square is\n"
 "SQUARE_M metres when printed at 100 %% (the PNG records its DPI), inside a white border\n"
 "of one square, which names the spec at the bottom. Says which paper it needs, leaving the\n"

@@ -14,8 +14,8 @@
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "calibrate");
 	fprintf(out,
-"Usage: mvod calibrate --source URI --board SPEC --out calib.json [options]\n"
 "Finds a calibration board in every frame of a recording, picks the views that best cover\n"
 "the image and the range of board tilts, calibrates the camera, drops views whose error is\n"
 "far above the rest and calibrates again, and writes mvod JSON (mvod-calibration/1).\n"
@@ -38,26 +38,30 @@ static void usage(FILE *out)
 "  --max-frames N        read at most N frames (default: the whole source)\n"
 "  --report FILE.png     picture of the corner coverage, the error per view, and a frame\n"
 "                        before and after undistortion\n"
+"  --force               write the calibration and exit 0 whatever the verdict (see below)\n"
 "\n");
 	cli_usage_general(out);
 	fprintf(out,
 "The JSON holds model, image_size, K, distortion, rms_px, std_dev (pinhole), verdict,\n"
 "board, source, created (UTC), views_used and per view its rms_px, rvec and tvec (board to\n"
 "camera, metres).\n"
-"The verdict is good, poor coverage, too few views or high error, with what to do about it;\n"
-"any verdict still writes the file.\n"
+"The verdict is good, poor coverage, too few views, high error or not one camera, with what\n"
+"to do about it. Not one camera (another image size, or two halves of the views that disagree)\n"
+"is a blend of cameras: the file is not written, unless --force. Too few views (under 15) is\n"
+"written, and exits 1. mvod run warns at start when --calib records a verdict but good.\n"
 "\n"
 "Example:\n"
 "  mvod calibrate --source file:board.mkv --board charuco:5x7:0.04:0.02:DICT_6X6_250 \\\n"
 "       --out calib.json --report calib.png\n"
 "\n"
-"Exit status: 0 on success, 1 on a run-time fault (no board, too few views, a write that\n"
-"failed), 2 on a usage error (--out or --report refused at start too).\n");
+"Exit status: 0 on success, 1 on a run-time fault (no board, too few views, not one camera,\n"
+"a write that failed; --force makes the last two verdicts 0), 2 on a usage error (--out or\n"
+"--report refused at start too).\n");
 }
 
 enum calib_opt_id {
 	OPT_SOURCE = CLI_OPT_OWN, OPT_BOARD, OPT_OUT, OPT_MODEL, OPT_RATIONAL, OPT_MAX_VIEWS,
-	OPT_MIN_CORNERS, OPT_MAX_FRAMES, OPT_REPORT,
+	OPT_MIN_CORNERS, OPT_MAX_FRAMES, OPT_REPORT, OPT_FORCE,
 };
 
 static const struct option own_opts[] = {
@@ -70,6 +74,7 @@ static const struct option own_opts[] = {
 	{"min-corners", required_argument, NULL, OPT_MIN_CORNERS},
 	{"max-frames", required_argument, NULL, OPT_MAX_FRAMES},
 	{"report", required_argument, NULL, OPT_REPORT},
+	{"force", no_argument, NULL, OPT_FORCE},
 	{NULL, 0, NULL, 0},
 };
 
@@ -77,6 +82,7 @@ struct cli {
 	struct mvod_calib_opts o;
 	const char *out;
 	int have_board, quiet;
+	bool force;   /* --force: any verdict is written and exits 0 */
 	bool refused; /* an output the policy refused: a usage error */
 };
 
@@ -90,6 +96,7 @@ static int parse_own(int id, const char *arg, void *ctx)
 	case OPT_OUT: c->out = arg; return 0;
 	case OPT_REPORT: c->o.report = arg; return 0;
 	case OPT_RATIONAL: c->o.rational = true; return 0;
+	case OPT_FORCE: c->force = true; return 0;
 	case OPT_BOARD:
 		c->have_board = 1;
 		return cli_parse_board(arg, &c->o.board);
@@ -174,8 +181,23 @@ static void print_result(const struct cli *c, const struct mvod_calib_result *r)
 	       r->has_std ? " (+- one standard deviation)" : "");
 	print_params(r);
 	printf("%s: verdict: %s. %s\n", cli_prog, mvod_calib_verdict_name(r->verdict), r->advice);
-	printf("%s: wrote %s%s%s\n", cli_prog, c->out, c->o.report ? " and " : "",
-	       c->o.report ? c->o.report : "");
+}
+
+/*
+ * What the verdict lets calibrate do, as --help says: a blend of cameras ("not one camera") is
+ * not written, and too few views is written but exits 1, each unless --force. Returns the exit
+ * status; *write: whether to write the file.
+ */
+static int judge(const struct cli *c, const struct mvod_calib_result *r, bool *write)
+{
+	*write = c->force || r->verdict != MVOD_VERDICT_MIXED;
+	if (c->force || (r->verdict != MVOD_VERDICT_MIXED && r->verdict != MVOD_VERDICT_FEW_VIEWS))
+		return EXIT_SUCCESS;
+	if (!*write)
+		LOG(ERROR, "%s not written: the views are not one camera (the verdict above): "
+			   "calibrate each camera on its own frames, or pass --force to write the "
+			   "blend anyway", c->out);
+	return EXIT_FAILURE;
 }
 
 /*
@@ -217,13 +239,21 @@ int mvod_cmd_calibrate(int argc, char **argv)
 		mvod_calib_result_free(&res);
 		return c.refused ? EXIT_USAGE : EXIT_FAILURE;
 	}
+	if (!c.quiet)
+		print_result(&c, &res);
+	bool write;
+	int status = judge(&c, &res, &write);
 	struct mvod_calib_meta meta;
 	mvod_calib_result_meta(&res, &c.o, &meta);
-	ret = mvod_calib_save(c.out, &res.cam, &meta);
+	ret = write ? mvod_calib_save(c.out, &res.cam, &meta) : 0;
 	if (ret)
 		LOG(ERROR, "cannot write %s: %s", c.out, strerror(-ret));
-	else if (!c.quiet)
-		print_result(&c, &res);
+	else if (write && !c.quiet)
+		printf("%s: wrote %s%s%s\n", cli_prog, c.out, c.o.report ? " and " : "",
+		       c.o.report ? c.o.report : "");
+	if (!ret && write && status)
+		LOG(ERROR, "%s: too few views to trust it (exit status 1): record more, or pass "
+			   "--force to accept it", c.out);
 	mvod_calib_result_free(&res);
-	return ret ? EXIT_FAILURE : EXIT_SUCCESS;
+	return ret ? EXIT_FAILURE : status;
 }

@@ -10,25 +10,34 @@
 #include <unistd.h>
 
 #include "mvod/board.h"
-#include "mvod/capture.h"
 #include "mvod/log.h"
 #include "mvod/pipeline.h"
 #include "util/output.h"
 
 const char *cli_prog = "mvod";
 
-/* Every subcommand; with the [log] keys of the config table. */
-static const struct option general_opts[] = {
-	{"help", no_argument, NULL, 'h'},
-	{"version", no_argument, NULL, CLI_OPT_VERSION},
-	{NULL, 0, NULL, 0},
-};
-
 static int append(struct option *dst, int n, const struct option *src)
 {
 	for (const struct option *o = src; o && o->name && n < CLI_MAX_OPTIONS - 1; o++)
 		dst[n++] = *o;
 	return n;
+}
+
+/* The flags of mvod_config_flags that every command takes (every) or mvod run's own. */
+static int append_flags(struct option *dst, int n, bool every, int base)
+{
+	for (int f = 0; f < MVOD_FLAG_COUNT && n < CLI_MAX_OPTIONS - 1; f++) {
+		const struct mvod_config_flag *c = &mvod_config_flags[f];
+		if (c->every_command == every)
+			dst[n++] = (struct option){c->flag, c->arg ? required_argument : no_argument,
+						   NULL, c->short_flag ? c->short_flag : base + f};
+	}
+	return n;
+}
+
+void cli_run_flags(struct option *dst)
+{
+	dst[append_flags(dst, 0, false, CLI_OPT_OWN)] = (struct option){0};
 }
 
 static bool is_general_key(const struct mvod_config_key *k)
@@ -38,7 +47,7 @@ static bool is_general_key(const struct mvod_config_key *k)
 
 void cli_options_join(struct option *dst, bool with_run, const struct option *own)
 {
-	int n = append(dst, 0, general_opts);
+	int n = append_flags(dst, 0, true, CLI_OPT_FLAG);
 	for (int k = 0; k < mvod_config_nkeys && n < CLI_MAX_OPTIONS - 1; k++) {
 		const struct mvod_config_key *key = &mvod_config_keys[k];
 		if (with_run || is_general_key(key))
@@ -117,101 +126,6 @@ int cli_run_status(int ret, const struct mvod_run_summary *s)
 	return s->config_failed || ret == -EPROTONOSUPPORT ? EXIT_USAGE : EXIT_FAILURE;
 }
 
-void cli_usage_input(FILE *out)
-{
-	fprintf(out,
-"Input:\n"
-"  --source URI          where frames come from (required):\n");
-	for (int i = 0; mvod_source_backends[i]; i++)
-		fprintf(out, "                          %-8s %s\n", mvod_source_backends[i]->scheme,
-			mvod_source_backends[i]->summary);
-	fprintf(out,
-"  --calib FILE          camera calibration: mvod JSON (mvod-calibration/1), OpenCV\n"
-"                        YAML/XML, ROS camera_info, JSON [K, dist], KITTI calib.txt or DSO\n"
-"                        camera.txt (see mvod calib-convert --help); not needed for kitti:,\n"
-"                        kitti-raw: and euroc: sources, nor tum: freiburg1/2/3 and monoVO\n"
-"                        folders\n"
-"  --gt FILE             ground-truth trajectory, TUM or KITTI (matched by timestamp or\n"
-"                        by index); enables the accuracy summary and the GT path in --plot.\n"
-"                        Default: the dataset's own (kitti: ../../poses/NN.txt, kitti-raw:\n"
-"                        oxts/data/, euroc:, tum: groundtruth.txt), as camera poses in the\n"
-"                        first frame's camera frame\n"
-"  --max-frames N        stop after N frames (default: the whole source)\n"
-"\n");
-}
-
-/* The run's files, which mvod run and a single mvod bench run both write. */
-void cli_usage_files(FILE *out)
-{
-	fprintf(out,
-"  --trajectory FILE     write every pose to FILE (complete lines only, even if killed)\n"
-"  --format tum|kitti    trajectory format (default: kitti for *.kitti, else tum)\n"
-"  --plot FILE.png       top-down plot of the path (with ground truth when --gt is given)\n");
-}
-
-void cli_usage_vo(FILE *out)
-{
-	fprintf(out,
-"Visual odometry:\n"
-"  --mode map|twoview    map (default): a local map of keyframes and points that carries\n"
-"                        one scale, PnP per frame and windowed bundle adjustment; twoview:\n"
-"                        frame to frame, each step scaled by the structure it shares with\n"
-"                        the last (kept for comparison; --detector sift needs it)\n"
-"  --ba-sync             map mode, live camera: wait for each bundle adjustment (on its own\n"
-"                        thread) at the frame after its keyframe, as files and datasets\n"
-"                        always do: results independent of the machine's speed\n"
-"  --scale MODE          step length: auto (default) from triangulated structure, the first\n"
-"                        step defines the unit; gt from the ground truth (benchmarking);\n"
-"                        height: metres from the ground plane and --camera-height;\n"
-"                        external: metres from the robot's speed (mvod.speed_t; map mode:\n"
-"                        the map rescaled by the distance it reports at keyframes)\n"
-"  --camera-height M     the camera's height above the ground in metres, up to 20\n"
-"                        (--scale height; 0 = none: the --calib file's mount, if it\n"
-"                        has one; see mvod mount --help)\n"
-"  --speed-channel NAME  LCM channel of mvod.speed_t (default MVOD_SPEED)\n"
-"  --speed-url URL       where speed comes from: an LCM URL, or file://LOG?mode=r to read\n"
-"                        a log (matched to frames by utime); default: the --lcm-url\n"
-"  --frontend auto|klt|orb  klt: FAST corners tracked frame to frame by pyramidal\n"
-"                        Lucas-Kanade (--tracks caps them); orb: features matched by\n"
-"                        descriptor in every frame (--detector, --matcher, --features,\n"
-"                        --ratio, --best below apply to it alone, and klt refuses them);\n"
-"                        auto (default): klt, but orb when one of those five options is\n"
-"                        given a value other than its default\n"
-"  --detector orb|sift   keypoints and descriptors: ORB (default; binary, fast) or SIFT\n"
-"  --matcher M           how features of consecutive frames are paired (default bf):\n"
-"                          bf          brute force, ratio test and cross-check\n"
-"                          bf-cross    brute force, mutual nearest neighbours, the --best N\n"
-"                                      closest\n"
-"                          bf-ratio    brute force, ratio test only\n"
-"                          flann       FLANN nearest neighbour, unfiltered (LSH 6/12/1 for\n"
-"                                      ORB, 5 kd-trees for SIFT)\n"
-"                          flann-ratio FLANN with the ratio test\n"
-"  --features N          feature cap of the descriptor front end (default 2000)\n"
-"  --tracks N            track cap of the klt front end (default 500; orb refuses it)\n"
-"  --ratio R             Lowe's ratio test threshold, 1 = off (default 0.8)\n"
-"  --best N              matches kept by bf-cross, 0 = all (default 200)\n"
-"  --robust magsac|ransac  robust estimator of the essential matrix: MAGSAC++ (default)\n"
-"                        or classic RANSAC\n"
-"  --ransac-px P         inlier threshold in pixels (MAGSAC: its upper bound; default 1.0)\n"
-"  --confidence C        RANSAC confidence (default 0.999)\n"
-"  --min-parallax P      rotation-compensated median flow in pixels below which a frame is\n"
-"                        treated as rotation only (default 1.0; KLT tracks use half)\n"
-"  --resize F            scale images by F in (0,1] before tracking (default 1)\n"
-"  --blur K              Gaussian blur with a KxK kernel, K odd, 0 = off (default 0)\n"
-"\n");
-}
-
-void cli_usage_general(FILE *out)
-{
-	fprintf(out,
-"General:\n"
-"  --log-level LEVEL     error, warn, info (default) or debug\n"
-"  -q, --quiet           same as --log-level warn, and no summary\n"
-"  -h, --help            this text\n"
-"  --version             print the version\n"
-"\n");
-}
-
 int cli_check_frontend(const struct mvod_config *cfg)
 {
 	char err[256];
@@ -227,6 +141,19 @@ int cli_parse_key(int k, const char *arg, struct mvod_config *cfg)
 	if (mvod_config_set(cfg, k, arg, want, sizeof(want)) == 0)
 		return 0;
 	return cli_bad_value(mvod_config_keys[k].flag, arg, want);
+}
+
+/* getopt's short options: the tables' letters (-q, -h). */
+static void short_options(char *buf, size_t len)
+{
+	size_t n = 0;
+	for (int k = 0; k < mvod_config_nkeys && n + 1 < len; k++)
+		if (mvod_config_keys[k].short_flag)
+			buf[n++] = mvod_config_keys[k].short_flag;
+	for (int f = 0; f < MVOD_FLAG_COUNT && n + 1 < len; f++)
+		if (mvod_config_flags[f].short_flag && mvod_config_flags[f].every_command)
+			buf[n++] = mvod_config_flags[f].short_flag;
+	buf[n] = '\0';
 }
 
 /* Short options are the table's short flags (-q); getopt hands back the letter. */
@@ -254,18 +181,20 @@ int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_par
 {
 	struct option opts[CLI_MAX_OPTIONS];
 	cli_options_join(opts, cfg != NULL, own);
+	char shorts[16];
+	short_options(shorts, sizeof(shorts));
 	struct mvod_config general;
 	mvod_config_default(&general);
 	struct mvod_config *c = cfg ? cfg : &general;
 	int id;
 	opterr = 0;
 	optind = 1;
-	while ((id = getopt_long(argc, argv, "qh", opts, NULL)) != -1) {
-		if (id == 'h') {
+	while ((id = getopt_long(argc, argv, shorts, opts, NULL)) != -1) {
+		if (id == mvod_config_flags[MVOD_FLAG_HELP].short_flag) {
 			usage(stdout);
 			return 1;
 		}
-		if (id == CLI_OPT_VERSION) {
+		if (id == CLI_OPT_FLAG + MVOD_FLAG_VERSION) {
 			printf("mvod %s\n", MVOD_VERSION);
 			return 1;
 		}

@@ -59,11 +59,12 @@ void cli_quiet_libraries(void);
 extern const char *cli_prog;
 
 /*
- * Option ids: mvod_config_keys[k] is CLI_OPT_KEY + k (the flags of the config table); each
- * command numbers its own from CLI_OPT_OWN.
+ * Option ids: mvod_config_keys[k] is CLI_OPT_KEY + k (the flags of the config table), the
+ * flags every command takes CLI_OPT_FLAG + their enum mvod_config_flag_id (or their short
+ * letter, -h); each command numbers its own from CLI_OPT_OWN.
  */
 enum cli_opt_id {
-	CLI_OPT_VERSION = 255,
+	CLI_OPT_FLAG = 240,
 	CLI_OPT_KEY = 256,
 	CLI_OPT_OWN = 512,
 };
@@ -73,14 +74,32 @@ enum cli_opt_id {
  * other flag of the config table (--source --calib ... --trajectory --lcm-url ...), and a
  * command's own (terminated by a zero entry).
  */
-#define CLI_MAX_OPTIONS 64
+#define CLI_MAX_OPTIONS 80
 void cli_options_join(struct option *dst, bool with_run, const struct option *own);
+/*
+ * mvod run's own flags of mvod_config_flags (--config, --print-config, --list-cameras,
+ * --help-all, --man), as CLI_OPT_OWN + their enum mvod_config_flag_id, into dst (room for
+ * MVOD_FLAG_COUNT + 1), terminated by a zero entry.
+ */
+void cli_run_flags(struct option *dst);
 
-/* Usage text of the shared groups. */
-void cli_usage_input(FILE *out);
-void cli_usage_vo(FILE *out);
-void cli_usage_files(FILE *out);
+/*
+ * The option reference, from the tables the parser uses (mvod_config_keys, mvod_config_flags,
+ * cli_commands): help.c. Which options a text lists: mvod run's (all), mvod bench's (the
+ * table's keys but mvod run's own and LCM's), or the General group every command has.
+ */
+enum cli_scope { CLI_SCOPE_RUN, CLI_SCOPE_BENCH, CLI_SCOPE_GENERAL };
+/* "Usage: mvod COMMAND ARGS" of cli_commands, "mvod [run] ..." for run. */
+void cli_usage_synopsis(FILE *out, const char *command);
+/* The scope's options, grouped, one line each (--help). */
+void cli_usage_options(FILE *out, enum cli_scope scope);
+/* The General group: --log-level, -q, -h, --version. */
 void cli_usage_general(FILE *out);
+/* mvod run's --help, --help-all (every option: value, default, config key, description). */
+void cli_usage_run(FILE *out);
+void cli_help_all(FILE *out);
+/* mvod(1) as roff: mvod run's options as --help-all has them, and every command. */
+void cli_man(FILE *out);
 
 /* --frontend klt with a descriptor option: -EINVAL after saying which (mvod_vo_check_frontend). */
 int cli_check_frontend(const struct mvod_config *cfg);
@@ -109,6 +128,25 @@ int cli_getopt_args(int argc, char **argv, const struct option *own, cli_own_par
 		    void *ctx, void (*usage)(FILE *), struct mvod_config *cfg, int *quiet,
 		    const char **args, int nargs, const char *args_usage);
 
+/* The commands, in the order --help and mvod(1) list them. */
+enum cli_command_id {
+	CLI_CMD_RUN,
+	CLI_CMD_CALIBRATE,
+	CLI_CMD_MOUNT,
+	CLI_CMD_BOARD,
+	CLI_CMD_CONVERT,
+	CLI_CMD_BENCH,
+	CLI_CMD_VIEW,
+	CLI_CMD_SPEED_LOG,
+	CLI_CMD_COUNT,
+};
+/* A command's name, what follows it in its synopsis, and its purpose. */
+struct cli_command {
+	const char *name, *args, *purpose;
+};
+/* By enum cli_command_id (help.c): main.c dispatches by name, --help and mvod(1) list them. */
+extern const struct cli_command cli_commands[CLI_CMD_COUNT];
+
 /* Subcommands: argv[0] is the subcommand's name. Return the process exit status. */
 int mvod_cmd_run(int argc, char **argv);
 int mvod_cmd_calibrate(int argc, char **argv);
@@ -117,5 +155,6 @@ int mvod_cmd_convert(int argc, char **argv);
 int mvod_cmd_view(int argc, char **argv);
 int mvod_cmd_bench(int argc, char **argv);
 int mvod_cmd_mount(int argc, char **argv);
+int mvod_cmd_speed_log(int argc, char **argv);
 
 #endif

@@ -10,8 +10,8 @@
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "calib-convert");
 	fprintf(out,
-"Usage: mvod calib-convert IN OUT [--to mvod|opencv|ros|kitti|dso] [--size WxH]\n"
 "Reads the camera calibration IN, prints what it holds, and writes it to OUT.\n"
 "\n"
 "IN may be (recognised by content):\n"

@@ -5,19 +5,16 @@
 
 #include "cli.h"
 
-struct command {
-	const char *name;
-	int (*main)(int argc, char **argv);
-};
-
-static const struct command commands[] = {
-	{"run", mvod_cmd_run},
-	{"calibrate", mvod_cmd_calibrate},
-	{"mount", mvod_cmd_mount},
-	{"board", mvod_cmd_board},
-	{"calib-convert", mvod_cmd_convert},
-	{"view", mvod_cmd_view},
-	{"bench", mvod_cmd_bench},
+/* Each command's entry point (their names and texts: cli_commands, help.c). */
+static int (*const command_main[CLI_CMD_COUNT])(int argc, char **argv) = {
+	[CLI_CMD_RUN] = mvod_cmd_run,
+	[CLI_CMD_CALIBRATE] = mvod_cmd_calibrate,
+	[CLI_CMD_MOUNT] = mvod_cmd_mount,
+	[CLI_CMD_BOARD] = mvod_cmd_board,
+	[CLI_CMD_CONVERT] = mvod_cmd_convert,
+	[CLI_CMD_BENCH] = mvod_cmd_bench,
+	[CLI_CMD_VIEW] = mvod_cmd_view,
+	[CLI_CMD_SPEED_LOG] = mvod_cmd_speed_log,
 };
 
 /*
@@ -45,17 +42,17 @@ int main(int argc, char **argv)
 	struct sigaction ign = {.sa_handler = SIG_IGN};
 	sigaction(SIGPIPE, &ign, NULL);
 	if (argc > 1 && argv[1][0] != '-') {
-		for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++) {
-			if (strcmp(argv[1], commands[i].name) == 0) {
+		for (int i = 0; i < CLI_CMD_COUNT; i++) {
+			if (strcmp(argv[1], cli_commands[i].name) == 0) {
 				static char prog[64];
-				snprintf(prog, sizeof(prog), "mvod %s", commands[i].name);
+				snprintf(prog, sizeof(prog), "mvod %s", cli_commands[i].name);
 				cli_prog = prog;
-				return commands[i].main(argc - 1, argv + 1);
+				return command_main[i](argc - 1, argv + 1);
 			}
 		}
 		fprintf(stderr, "mvod: unknown command '%s'; the commands are", argv[1]);
-		for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
-			fprintf(stderr, "%s %s", i ? "," : "", commands[i].name);
+		for (int i = 0; i < CLI_CMD_COUNT; i++)
+			fprintf(stderr, "%s %s", i ? "," : "", cli_commands[i].name);
 		fprintf(stderr, " (see mvod --help)\n");
 		return EXIT_USAGE;
 	}

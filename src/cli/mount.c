@@ -19,8 +19,8 @@
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "mount");
 	fprintf(out,
-"Usage: mvod mount --source URI --board SPEC --calib FILE [options]\n"
 "Measures how the camera sits above the floor from a calibration board lying flat on it:\n"
 "the height of the camera centre above the floor and the camera's pitch and roll. Takes\n"
 "the board's pose in every frame under the camera file's intrinsics, refuses views whose\n"

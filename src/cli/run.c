@@ -66,106 +66,23 @@ void cli_run_install_signals(void)
 	sigaction(SIGHUP, &hup, NULL);
 }
 
-static void usage_output(FILE *out)
-{
-	fprintf(out,
-"Output:\n"
-"  --lcm-url URL         LCM provider (default: $LCM_DEFAULT_URL, then LCM's default);\n"
-"                        e.g. memq:// (in-process), file:///tmp/mvod.lcmlog?mode=w\n"
-"  --no-lcm              do not publish over LCM\n"
-"  --pose-channel NAME   LCM channel of mvod.pose_t (default MVOD_POSE); mvod.pose2_t goes\n"
-"                        out on the same name with a 2 appended (MVOD_POSE2)\n"
-"  --status-channel NAME LCM channel of mvod.status_t (default MVOD_STATUS); status2_t: +2\n"
-"  --status-rate HZ      mvod.status_t messages per second, 0.1 to 100 (default 1); also\n"
-"                        on every state change\n");
-	cli_usage_files(out);
-	fprintf(out,
-"  --frame camera|ros    axes of the poses on LCM and in --trajectory: camera (default; the\n"
-"                        first camera frame, x right, y down, z forward) or ros (the body\n"
-"                        frame at the first frame, x forward, y left, z up); the evaluation\n"
-"                        against --gt stays in the camera frame\n"
-"  --camera-to-body X,Y,Z,QX,QY,QZ,QW  with --frame ros: the camera optical frame's pose in\n"
-"                        the body frame, metres and unit quaternion (default: at the body's\n"
-"                        origin, level, looking forward: 0,0,0,-0.5,0.5,-0.5,0.5)\n"
-"  --clock monotonic|realtime  time base of a camera's utime (v4l2:, libcamera:): the\n"
-"                        buffer's CLOCK_MONOTONIC (default) or the same instant in Unix time\n"
-"\n");
-}
-
-static void usage(FILE *out)
-{
-	fprintf(out,
-"Usage: mvod [run] --source URI [options]\n"
-"       mvod [run] --config FILE [options]\n"
-"       mvod --list-cameras\n"
-"       mvod calibrate|mount|board|calib-convert|bench|view ...   (mvod COMMAND --help)\n"
-"Monocular visual odometry: frames in, camera poses out over LCM and to files.\n"
-"\n");
-	cli_usage_input(out);
-	cli_usage_vo(out);
-	usage_output(out);
-	fprintf(out,
-"Configuration:\n"
-"  --config FILE         read settings from an INI file (sections [source] [calibration]\n"
-"                        [vo] [lcm] [output] [log], one key per option above); flags\n"
-"                        override it. Without --config no file is read.\n"
-"  --print-config        print the settings in effect (file and flags) as such a file, then\n"
-"                        exit\n"
-"\n"
-"Signals: SIGTERM or SIGINT stop cleanly (a second one at once); SIGHUP reopens the\n"
-"trajectory file and a file:// LCM log by name (log rotation).\n"
-"\n"
-"Cameras:\n"
-"  --list-cameras        list the V4L2 and libcamera cameras attached, their formats, sizes\n"
-"                        and rates, each with the --source URI that opens it; then exit\n"
-"\n");
-	cli_usage_general(out);
-	fprintf(out,
-"Commands:\n"
-"  run                   track a source and publish poses (the default)\n"
-"  calibrate             calibrate a camera from a ChArUco or chessboard recording\n"
-"  mount                 the camera's height, pitch and roll from a board on the floor\n"
-"  board                 write a printable calibration target\n"
-"  calib-convert IN OUT  convert OpenCV/ROS/KITTI calibration files to mvod JSON\n"
-"  bench                 measure accuracy and speed against ground truth\n"
-"  view                  draw the path, heading, state and rates of a running mvod\n"
-"\n"
-"Examples:\n"
-"  mvod --source 'v4l2:/dev/video0?width=640&height=480&fps=30&format=YUYV' \\\n"
-"       --calib webcam.json --lcm-url memq://\n"
-"  mvod --source kitti:data/sequences/06 --gt data/poses/06.txt --scale gt \\\n"
-"       --trajectory out.kitti --format kitti --plot out.png --lcm-url memq://\n"
-"  mvod --config /etc/mvod/mvod.conf --log-level debug --print-config\n"
-"\n"
-"Exit status: 0 on success; 1 on a run-time fault, which a restart may fix (a camera\n"
-"absent, a write that failed, a source that broke off); 2 on a usage or configuration\n"
-"error, which only an edit fixes (a bad flag or config file; a calibration, ground truth\n"
-"or speed source that cannot serve; an output refused at start). The service does not\n"
-"restart on 2.\n");
-}
-
-enum run_opt_id { OPT_CONFIG = CLI_OPT_OWN, OPT_PRINT_CONFIG, OPT_LIST_CAMERAS };
-
-static const struct option run_own_opts[] = {
-	{"config", required_argument, NULL, OPT_CONFIG},
-	{"print-config", no_argument, NULL, OPT_PRINT_CONFIG},
-	{"list-cameras", no_argument, NULL, OPT_LIST_CAMERAS},
-	{NULL, 0, NULL, 0},
-};
-
 struct cli {
 	struct mvod_config flags; /* what the command line said */
 	const char *config;       /* --config FILE */
 	int print_config, list_cameras;
+	void (*reference)(FILE *out); /* --help-all or --man: printed, and nothing else done */
 };
 
+/* mvod run's own flags (mvod_config_flags), as CLI_OPT_OWN + their id. */
 static int parse_own(int id, const char *arg, void *ctx)
 {
 	struct cli *c = ctx;
-	switch (id) {
-	case OPT_CONFIG: c->config = arg; return 0;
-	case OPT_PRINT_CONFIG: c->print_config = 1; return 0;
-	case OPT_LIST_CAMERAS: c->list_cameras = 1; return 0;
+	switch (id - CLI_OPT_OWN) {
+	case MVOD_FLAG_CONFIG: c->config = arg; return 0;
+	case MVOD_FLAG_PRINT_CONFIG: c->print_config = 1; return 0;
+	case MVOD_FLAG_LIST_CAMERAS: c->list_cameras = 1; return 0;
+	case MVOD_FLAG_HELP_ALL: c->reference = cli_help_all; return 0;
+	case MVOD_FLAG_MAN: c->reference = cli_man; return 0;
 	}
 	return -ENOENT;
 }
@@ -189,7 +106,13 @@ static int load_config(struct cli *c, struct mvod_config *cfg)
 static int parse_cli(int argc, char **argv, struct cli *c, struct mvod_config *cfg)
 {
 	mvod_config_default(&c->flags);
-	int ret = cli_getopt(argc, argv, run_own_opts, parse_own, c, usage, &c->flags, NULL);
+	struct option own[MVOD_FLAG_COUNT + 1];
+	cli_run_flags(own);
+	int ret = cli_getopt(argc, argv, own, parse_own, c, cli_usage_run, &c->flags, NULL);
+	if (!ret && c->reference) { /* before the config file: the manual needs none */
+		c->reference(stdout);
+		return 1;
+	}
 	if (!ret)
 		ret = load_config(c, cfg);
 	if (ret || c->list_cameras || c->print_config)
@@ -254,7 +177,7 @@ static void print_summary(const struct mvod_config *c, const struct mvod_run_sum
 {
 	printf("mvod: %lld frames in %.2f s (%.1f fps), %lld tracked, %lld held, front end %s",
 	       (long long)s->frames, s->wall_s, s->fps, (long long)s->tracked, (long long)s->held,
-	       mvod_frontend_names[s->frontend]);
+	       s->frontend);
 	if (s->live)
 		printf(", %lld dropped", (long long)s->dropped);
 	print_skipped(s);

@@ -41,8 +41,8 @@ static void on_signal(int sig)
 
 static void usage(FILE *out)
 {
+	cli_usage_synopsis(out, "view");
 	fprintf(out,
-"Usage: mvod view [--lcm-url URL] [--png FILE [--every N]] [options]\n"
 "Draws what a running mvod publishes over LCM, or an LCM log of it: the path seen from\n"
 "above (x right, z forward; metres with --scale gt, else units of the first step, labelled\n"
 "free scale), the heading, the tracking state, mvod's frame rate and the rate poses arrive\n"

@@ -9,6 +9,7 @@
 #include <ini.h>
 #include <lcm/lcm.h>
 
+#include "mvod/vo_types.h"
 #include "util/body_frame.h"
 #include "util/errbuf.h"
 #include "util/input.h"
@@ -30,67 +31,195 @@ static const char *const scale_choices[] = {"auto", "gt", "height", "external", 
 
 #define AT(field) offsetof(struct mvod_config, field)
 #define KEY(s, k, f, t, field) .section = s, .key = k, .flag = f, .type = t, .offset = AT(field)
-#define STR(s, k, f, field) {KEY(s, k, f, MVOD_CONFIG_STRING, field)}
-#define OPTSTR(s, k, f, field) {KEY(s, k, f, MVOD_CONFIG_STRING, field), .optional = true}
-#define NUM(s, k, t, field, l, h) {KEY(s, k, k, t, field), .lo = l, .hi = h}
-#define CHOICE(s, k, f, field, c) {KEY(s, k, f, MVOD_CONFIG_ENUM, field), .choices = c}
-#define FLAG(s, k, f, field, v) {KEY(s, k, f, MVOD_CONFIG_BOOL, field), .flag_value = v}
+/* What --help, --help-all and mvod(1) say of a key: its value's name, a line, and the rest. */
+#define DOC(a, s, h) .arg = a, .summary = s, .help = h
+#define OPTSTR(s, k, f, field, ...) {KEY(s, k, f, MVOD_CONFIG_STRING, field), .optional = true, \
+				     __VA_ARGS__}
+#define NUM(s, k, t, field, l, h, ...) {KEY(s, k, k, t, field), .lo = l, .hi = h, __VA_ARGS__}
+#define CHOICE(s, k, f, field, c, ...) {KEY(s, k, f, MVOD_CONFIG_ENUM, field), .choices = c, \
+					__VA_ARGS__}
+#define FLAG(s, k, f, field, v, ...) {KEY(s, k, f, MVOD_CONFIG_BOOL, field), .flag_value = v, \
+				      __VA_ARGS__}
 /* mvod bench runs without LCM: the [lcm] keys are mvod run's alone. */
 #define LCM(k, f, t, field) KEY("lcm", k, f, t, field), .run_only = true
 
-/* The order here is the order of --print-config and of the example mvod.conf. */
+/*
+ * The order here is the order of --print-config, of the example mvod.conf, and of --help,
+ * --help-all and mvod(1) within each section. The texts are plain: the help module wraps
+ * them for a terminal and escapes them for roff; an enum's choices are its value's name.
+ */
 const struct mvod_config_key mvod_config_keys[] = {
-	OPTSTR("source", "uri", "source", run.source),
-	NUM("source", "max-frames", MVOD_CONFIG_INT64, run.max_frames, 0, 1e12),
-	OPTSTR("source", "gt", "gt", run.gt),
+	OPTSTR("source", "uri", "source", run.source,
+	       DOC("URI", "where frames come from (required)",
+		   "The URI's scheme picks the source, each listed below with its form. Files, "
+		   "image folders and datasets give every frame in order; a live camera the "
+		   "newest."), .dflt = "none (required)"),
+	NUM("source", "max-frames", MVOD_CONFIG_INT64, run.max_frames, 0, 1e12,
+	    DOC("N", "stop after N frames; 0: the whole source", NULL)),
+	OPTSTR("source", "gt", "gt", run.gt,
+	       DOC("FILE", "ground-truth trajectory, TUM or KITTI",
+		   "TUM is matched to frames by timestamp, KITTI by index. It adds the accuracy "
+		   "summary and the ground truth's path to --plot."),
+	       .dflt = "the dataset's own (kitti: ../../poses/NN.txt, kitti-raw: oxts/data/, "
+		       "euroc:, tum: groundtruth.txt), as camera poses in the first frame's camera "
+		       "frame; else none"),
 	{KEY("source", "clock", "clock", MVOD_CONFIG_ENUM, run.clock), .choices = mvod_clock_names,
-	 .run_only = true},
-	OPTSTR("calibration", "file", "calib", run.calib),
-	CHOICE("vo", "mode", "mode", run.vo.mode, mvod_vo_mode_names),
-	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices),
-	CHOICE("vo", "frontend", "frontend", run.vo.frontend, mvod_frontend_names),
-	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names),
-	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names),
-	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000),
-	NUM("vo", "tracks", MVOD_CONFIG_INT, run.vo.max_tracks, 50, 100000),
-	NUM("vo", "ratio", MVOD_CONFIG_DOUBLE, run.vo.ratio, 0.1, 1.0),
-	NUM("vo", "best", MVOD_CONFIG_INT, run.vo.best_n, 0, 100000),
-	CHOICE("vo", "robust", "robust", run.vo.robust, mvod_robust_names),
-	NUM("vo", "ransac-px", MVOD_CONFIG_DOUBLE, run.vo.ransac_px, 0.05, 50),
-	NUM("vo", "confidence", MVOD_CONFIG_DOUBLE, run.vo.ransac_conf, 0.5, 0.999999),
-	NUM("vo", "min-parallax", MVOD_CONFIG_DOUBLE, run.vo.min_parallax_px, 0, 100),
-	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1),
+	 .run_only = true,
+	 DOC(NULL, "time base of a camera's utime (v4l2:, libcamera:)",
+	     "monotonic: the buffer's CLOCK_MONOTONIC; realtime: the same instant in Unix time, "
+	     "to match other sensors' clocks.")},
+	OPTSTR("calibration", "file", "calib", run.calib,
+	       DOC("FILE", "camera calibration",
+		   "mvod JSON (mvod-calibration/1, as mvod calibrate writes it), OpenCV YAML/XML, "
+		   "ROS camera_info, JSON [K, dist], KITTI calib.txt or DSO camera.txt (mvod "
+		   "calib-convert --help). Not needed for kitti:, kitti-raw: and euroc: sources, "
+		   "nor tum: freiburg1/2/3 and monoVO folders. A file whose recorded verdict is "
+		   "not good is run with a warning."), .dflt = "the dataset's own; else none"),
+	CHOICE("vo", "mode", "mode", run.vo.mode, mvod_vo_mode_names,
+	       DOC(NULL, "how poses are estimated: against a map, or frame to frame",
+		   "map: a local map of keyframes and points that carries one scale, PnP per frame "
+		   "and windowed bundle adjustment on its own thread. twoview: the essential matrix "
+		   "frame to frame, each step scaled by the structure it shares with the last; kept "
+		   "for comparison, and what --detector sift needs (the map keeps ORB "
+		   "descriptors).")),
+	CHOICE("vo", "scale", "scale", run.vo.scale_mode, scale_choices,
+	       DOC(NULL, "where the step length comes from",
+		   "auto: triangulated structure, the first step is the unit; gt: the ground truth "
+		   "(benchmarking); height: metres from the ground plane and --camera-height; "
+		   "external: metres from the robot's speed, mvod.speed_t (--speed-channel, "
+		   "--speed-url; mvod speed-log makes a log of it from a ground truth).")),
+	CHOICE("vo", "frontend", "frontend", run.vo.frontend, mvod_frontend_names,
+	       DOC(NULL, "how features reach the motion estimate: tracks or descriptors",
+		   "klt: FAST corners tracked frame to frame by pyramidal Lucas-Kanade, at most "
+		   "--tracks. orb: features detected and matched by descriptor in every frame "
+		   "(--detector, --matcher, --ratio, --best apply to it alone, and klt refuses "
+		   "them; --features is its count). auto: klt, but orb when one of those four "
+		   "options is not its default; --print-config says which runs and why. "
+		   "--features never picks a front end.")),
+	CHOICE("vo", "detector", "detector", run.vo.detector, mvod_detector_names,
+	       DOC(NULL, "the descriptor front end's keypoints: ORB (fast) or SIFT",
+		   "SIFT needs --mode twoview.")),
+	CHOICE("vo", "matcher", "matcher", run.vo.matcher, mvod_matcher_names,
+	       DOC(NULL, "how descriptors of consecutive frames are paired",
+		   "bf: brute force, ratio test and cross-check; bf-cross: brute force, mutual "
+		   "nearest neighbours, the --best closest; bf-ratio: brute force, ratio test only; "
+		   "flann: FLANN nearest neighbour, unfiltered (LSH 6/12/1 for ORB, 5 kd-trees for "
+		   "SIFT); flann-ratio: FLANN with the ratio test.")),
+	NUM("vo", "features", MVOD_CONFIG_INT, run.vo.max_features, 50, 100000,
+	    DOC("N", "ORB's or SIFT's feature count per frame",
+		"Picks no front end: with klt running (the default) it is unused and the run "
+		"warns; klt's budget is --tracks.")),
+	NUM("vo", "tracks", MVOD_CONFIG_INT, run.vo.max_tracks, 50, 100000,
+	    DOC("N", "the klt front end's track cap",
+		"Where orb runs it is refused, since it would be ignored.")),
+	NUM("vo", "ratio", MVOD_CONFIG_DOUBLE, run.vo.ratio, 0.1, 1.0,
+	    DOC("R", "Lowe's ratio test threshold; 1 turns it off",
+		"For bf, bf-ratio and flann-ratio.")),
+	NUM("vo", "best", MVOD_CONFIG_INT, run.vo.best_n, 0, 100000,
+	    DOC("N", "matches bf-cross keeps, closest first; 0: all", NULL)),
+	CHOICE("vo", "robust", "robust", run.vo.robust, mvod_robust_names,
+	       DOC(NULL, "robust estimator of the essential matrix",
+		   "magsac: MAGSAC++ (OpenCV's USAC); ransac: classic RANSAC.")),
+	NUM("vo", "ransac-px", MVOD_CONFIG_DOUBLE, run.vo.ransac_px, 0.05, 50,
+	    DOC("PX", "inlier threshold in pixels (MAGSAC++: its upper bound)", NULL)),
+	NUM("vo", "confidence", MVOD_CONFIG_DOUBLE, run.vo.ransac_conf, 0.5, 0.999999,
+	    DOC("C", "RANSAC confidence", NULL)),
+	NUM("vo", "min-parallax", MVOD_CONFIG_DOUBLE, run.vo.min_parallax_px, 0, 100,
+	    DOC("PX", "flow below which a frame is rotation only",
+		"The rotation-compensated median flow in pixels; the klt front end uses half of "
+		"it.")),
+	NUM("vo", "resize", MVOD_CONFIG_DOUBLE, run.vo.resize, 0.05, 1,
+	    DOC("F", "scale images by F before tracking", "The intrinsics follow.")),
 	{KEY("vo", "blur", "blur", MVOD_CONFIG_INT, run.vo.blur_ksize), .lo = 0, .hi = 99,
-	 .odd = true},
-	FLAG("vo", "ba-sync", "ba-sync", run.vo.ba_sync, true),
+	 .odd = true, DOC("K", "Gaussian blur with a KxK kernel; 0: off", NULL)},
+	FLAG("vo", "ba-sync", "ba-sync", run.vo.ba_sync, true,
+	     DOC(NULL, "map mode, live camera: wait for each bundle adjustment",
+		 "At the frame after its keyframe, as files and datasets always do: results "
+		 "independent of the machine's speed.")),
 	/* 0 = none; above 20 m is no robot's camera: millimetres or feet by mistake. */
-	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0, 20),
+	NUM("vo", "camera-height", MVOD_CONFIG_DOUBLE, run.vo.camera_height_m, 0, 20,
+	    DOC("M", "the camera's height above the ground in metres, for --scale height",
+		"0: none, then the --calib file's mount (mvod mount --help).")),
 	{KEY("vo", "speed-channel", "speed-channel", MVOD_CONFIG_STRING, run.speed_channel),
-	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH},
-	OPTSTR("vo", "speed-url", "speed-url", run.speed_url),
-	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false},
-	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true},
+	 .hi = LCM_MAX_CHANNEL_NAME_LENGTH,
+	 DOC("NAME", "LCM channel of mvod.speed_t, for --scale external", NULL)},
+	OPTSTR("vo", "speed-url", "speed-url", run.speed_url,
+	       DOC("URL", "where mvod.speed_t comes from",
+		   "An LCM URL, or file://LOG?mode=r to read a log, matched to frames by utime."),
+	       .dflt = "the --lcm-url"),
+	{LCM("enabled", "no-lcm", MVOD_CONFIG_BOOL, lcm_enabled), .flag_value = false,
+	 DOC(NULL, "do not publish over LCM", NULL)},
+	{LCM("url", "lcm-url", MVOD_CONFIG_STRING, lcm_url), .optional = true,
+	 DOC("URL", "LCM provider",
+	     "For example memq:// (in-process) or file:///tmp/mvod.lcmlog?mode=w (a log, written "
+	     "whole events at a time)."),
+	 .dflt = "$LCM_DEFAULT_URL, then LCM's default"},
 	{LCM("pose-channel", "pose-channel", MVOD_CONFIG_STRING, pose_channel),
-	 .hi = MVOD_MAX_CHANNEL_LENGTH},
+	 .hi = MVOD_MAX_CHANNEL_LENGTH,
+	 DOC("NAME", "LCM channel of mvod.pose_t; mvod.pose2_t goes on NAME2", NULL)},
 	{LCM("status-channel", "status-channel", MVOD_CONFIG_STRING, status_channel),
-	 .hi = MVOD_MAX_CHANNEL_LENGTH},
-	{LCM("status-rate", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz), .lo = 0.1, .hi = 100},
-	OPTSTR("output", "trajectory", "trajectory", run.trajectory),
+	 .hi = MVOD_MAX_CHANNEL_LENGTH,
+	 DOC("NAME", "LCM channel of mvod.status_t; mvod.status2_t goes on NAME2", NULL)},
+	{LCM("status-rate", "status-rate", MVOD_CONFIG_DOUBLE, run.status_hz), .lo = 0.1, .hi = 100,
+	 DOC("HZ", "status messages per second, besides one on every state change", NULL)},
+	OPTSTR("output", "trajectory", "trajectory", run.trajectory,
+	       DOC("FILE", "write every pose to FILE",
+		   "Each line is written whole, so a killed mvod leaves only complete lines; "
+		   "SIGHUP reopens it by name.")),
 	{KEY("output", "format", "format", MVOD_CONFIG_ENUM, run.traj_format),
-	 .choices = mvod_traj_format_names, .derived = true},
-	OPTSTR("output", "plot", "plot", run.plot),
+	 .choices = mvod_traj_format_names, .derived = true,
+	 DOC(NULL, "trajectory format", NULL),
+	 .dflt = "kitti for a --trajectory named *.kitti, else tum"},
+	OPTSTR("output", "plot", "plot", run.plot,
+	       DOC("FILE.png", "top-down plot of the path, with the ground truth's", NULL)),
 	/* Poses in a robot's frame: mvod run's outputs; bench evaluates the camera's. */
 	{KEY("output", "frame", "frame", MVOD_CONFIG_ENUM, run.axes), .choices = mvod_axes_names,
-	 .run_only = true},
+	 .run_only = true,
+	 DOC(NULL, "axes of the poses on LCM and in --trajectory",
+	     "camera: the first camera frame, x right, y down, z forward; ros: the body frame "
+	     "at the first frame, x forward, y left, z up. The evaluation against --gt stays in "
+	     "the camera frame.")},
 	{KEY("output", "camera-to-body", "camera-to-body", MVOD_CONFIG_STRING, run.camera_to_body),
-	 .optional = true, .run_only = true, .check = mvod_body_frame_check},
-	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names),
+	 .optional = true, .run_only = true, .check = mvod_body_frame_check,
+	 DOC("X,Y,Z,QX,QY,QZ,QW", "with --frame ros: the camera's pose in the body frame",
+	     "Metres and a unit quaternion."),
+	 .dflt = "at the body's origin, level, looking forward: 0,0,0,-0.5,0.5,-0.5,0.5"},
+	CHOICE("log", "level", "log-level", log_level, mvod_log_level_names,
+	       DOC(NULL, "what is logged to stderr (the journal under systemd)", NULL)),
 	{KEY("log", "quiet", "quiet", MVOD_CONFIG_BOOL, quiet), .short_flag = 'q',
-	 .flag_value = true},
+	 .flag_value = true, DOC(NULL, "warnings and errors only, and no summary", NULL)},
 };
 const int mvod_config_nkeys = sizeof(mvod_config_keys) / sizeof(mvod_config_keys[0]);
 _Static_assert(sizeof(mvod_config_keys) / sizeof(mvod_config_keys[0]) <= 64,
 	       "set and owned are 64-bit masks");
+
+const struct mvod_config_flag mvod_config_flags[MVOD_FLAG_COUNT] = {
+	[MVOD_FLAG_CONFIG] = {"config", 0, "FILE", false, "Configuration",
+			      "read settings from an INI file; flags override it",
+			      "Sections [source] [calibration] [vo] [lcm] [output] [log], one key per "
+			      "option (each option's Config: above). An unknown section or key, or a "
+			      "bad value, is an error naming the file, line and key. Without --config "
+			      "no file is read."},
+	[MVOD_FLAG_PRINT_CONFIG] = {"print-config", 0, NULL, false, "Configuration",
+				    "print the settings in effect as such a file, then exit",
+				    "The file's, then the flags over it; a key that follows others "
+				    "(format) is a comment, and frontend = auto says which front end "
+				    "runs and why."},
+	[MVOD_FLAG_LIST_CAMERAS] = {"list-cameras", 0, NULL, false, "Cameras",
+				    "list the cameras attached, then exit",
+				    "V4L2 and libcamera cameras, their formats, sizes and rates, each "
+				    "with the --source URI that opens it."},
+	[MVOD_FLAG_HELP] = {"help", 'h', NULL, true, "General", "a short usage text, then exit",
+			    NULL},
+	[MVOD_FLAG_HELP_ALL] = {"help-all", 0, NULL, false, "General",
+				"every option with its value, default, config key and description, "
+				"then exit", NULL},
+	[MVOD_FLAG_MAN] = {"man", 0, NULL, false, "General",
+			   "the manual page mvod(1) as roff, then exit",
+			   "For a build that is not installed: mvod --man | man -l -"},
+	[MVOD_FLAG_VERSION] = {"version", 0, NULL, true, "General", "print the version, then exit",
+			       NULL},
+};
 
 static void *field(struct mvod_config *c, const struct mvod_config_key *k)
 {
@@ -454,6 +583,11 @@ static void format_value(const struct mvod_config *c, const struct mvod_config_k
 	}
 }
 
+void mvod_config_value_text(const struct mvod_config *c, int k, char *buf, size_t len)
+{
+	format_value(c, &mvod_config_keys[k], buf, len);
+}
+
 /* Whether inih reads "key = value" back as value. */
 static const char *unprintable(const struct mvod_config_key *k, const char *value)
 {
@@ -467,6 +601,44 @@ static const char *unprintable(const struct mvod_config_key *k, const char *valu
 	if (strlen(k->key) + 3 + n > MVOD_CONFIG_MAX_LINE)
 		return "more characters than an INI line can hold";
 	return NULL;
+}
+
+static int key_of_flag(const char *flag)
+{
+	for (int k = 0; k < mvod_config_nkeys; k++)
+		if (strcmp(mvod_config_keys[k].flag, flag) == 0)
+			return k;
+	return -1;
+}
+
+/*
+ * After frontend = auto, which front end that runs and why, as an INI comment (the key stays
+ * auto when the printout is read back, and keeps choosing): "  ; runs klt: none of detector,
+ * matcher, ratio, best (orb and sift only) set", or "  ; runs orb: matcher = flann (...) set".
+ */
+static void frontend_note(const struct mvod_config *c, const struct mvod_config_key *k,
+			  char *buf, size_t len)
+{
+	const struct mvod_vo_params *p = &c->run.vo;
+	buf[0] = '\0';
+	if (k->offset != AT(run.vo.frontend) || p->frontend != MVOD_FRONTEND_AUTO)
+		return;
+	const char *opt = mvod_vo_descriptor_option(p);
+	int used = snprintf(buf, len, "  ; runs %s: ", mvod_vo_frontend_name(p));
+	if (used < 0 || (size_t)used >= len)
+		return;
+	if (opt) {
+		char value[64];
+		format_value(c, &mvod_config_keys[key_of_flag(opt)], value, sizeof(value));
+		snprintf(buf + used, len - (size_t)used, "%s = %s (orb and sift only) set", opt, value);
+		return;
+	}
+	used += snprintf(buf + used, len - (size_t)used, "none of ");
+	for (int i = 0; mvod_vo_descriptor_flags[i] && (size_t)used < len; i++)
+		used += snprintf(buf + used, len - (size_t)used, "%s%s", i ? ", " : "",
+				 mvod_vo_descriptor_flags[i]);
+	if ((size_t)used < len)
+		snprintf(buf + used, len - (size_t)used, " (orb and sift only) set");
 }
 
 int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t errlen)
@@ -485,8 +657,10 @@ int mvod_config_print(const struct mvod_config *c, FILE *out, char *err, size_t 
 			fprintf(out, "%s[%s]\n", i ? "\n" : "", k->section);
 		section = k->section;
 		bool derived = k->derived && !(c->set & (1ULL << i));
-		fprintf(out, "%s%s =%s%s%s\n", derived ? "# " : "", k->key, *value ? " " : "", value,
-			derived ? "  (not set: follows other keys; uncomment to fix it)" : "");
+		char note[160];
+		frontend_note(c, k, note, sizeof(note));
+		fprintf(out, "%s%s =%s%s%s%s\n", derived ? "# " : "", k->key, *value ? " " : "", value,
+			derived ? "  (not set: follows other keys; uncomment to fix it)" : "", note);
 	}
 	return ferror(out) ? mvod_errf(err, errlen, -EIO, "write error") : 0;
 }

@@ -72,6 +72,12 @@ static int64_t now_us(void)
 
 int mvod_lcm_log_write(struct mvod_lcm_log *log, const char *channel, const void *data, size_t len)
 {
+	return mvod_lcm_log_write_at(log, channel, data, len, now_us());
+}
+
+int mvod_lcm_log_write_at(struct mvod_lcm_log *log, const char *channel, const void *data,
+			  size_t len, int64_t utime)
+{
 	if (log->error)
 		return log->error;
 	size_t clen = strlen(channel);
@@ -79,7 +85,7 @@ int mvod_lcm_log_write(struct mvod_lcm_log *log, const char *channel, const void
 		return -EMSGSIZE;
 	uint8_t *p = put_be(log->buf, LOG_SYNC, 4);
 	p = put_be(p, (uint64_t)log->next_event, 8);
-	p = put_be(p, (uint64_t)now_us(), 8);
+	p = put_be(p, (uint64_t)utime, 8);
 	p = put_be(p, clen, 4);
 	p = put_be(p, len, 4);
 	memcpy(p, channel, clen);

@@ -29,6 +29,9 @@ int mvod_lcm_log_open(const char *what, const char *path, size_t max_event,
  * failure nothing more is written and every call returns that error. No allocation.
  */
 int mvod_lcm_log_write(struct mvod_lcm_log *log, const char *channel, const void *data, size_t len);
+/* The same with the event's time given (microseconds): a log made offline (mvod speed-log). */
+int mvod_lcm_log_write_at(struct mvod_lcm_log *log, const char *channel, const void *data,
+			  size_t len, int64_t utime);
 /* Log rotation: mvod_output_reopen (util/output.h) of the file; 0 or -errno, why in err. */
 int mvod_lcm_log_reopen(struct mvod_lcm_log *log, char *err, size_t errlen);
 /* fsyncs and closes; the first error of any write or of this. NULL: 0. */

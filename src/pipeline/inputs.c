@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "mvod/calibrate.h"
 #include "mvod/log.h"
 #include "util/errbuf.h"
 
@@ -19,6 +20,11 @@ static int open_camera(struct run *r)
 			LOG(ERROR, "calibration: %s", err);
 		if (ret)
 			return ret;
+		const char *good = mvod_calib_verdict_name(MVOD_VERDICT_GOOD);
+		if (r->cam.verdict[0] && strcmp(r->cam.verdict, good) != 0)
+			LOG(WARN, "calibration %s was judged \"%s\" by mvod calibrate: the poses may "
+				  "be off; calibrate again (mvod calibrate --help)", o->calib,
+			    r->cam.verdict);
 	} else if (mvod_source_camera(r->src, &r->cam) != 0) {
 		LOG(ERROR, "%s carries no camera intrinsics: pass --calib FILE (mvod JSON or KITTI "
 			   "calib.txt)", o->source);
@@ -163,6 +169,27 @@ static int check_frames(const struct mvod_vo_params *params, const struct mvod_c
 			 MVOD_VO_MIN_PX);
 }
 
+/*
+ * The front end that runs, and why when auto chose. --features with klt is no clash (it was
+ * auto's switch to orb): a file may set it for when orb runs; but a user who set it to go
+ * faster or see more is told, once, what klt reads instead. By value, as auto reads options.
+ */
+static void log_frontend(const struct mvod_vo_params *p)
+{
+	const char *name = mvod_vo_frontend_name(p), *opt = mvod_vo_descriptor_option(p);
+	if (p->frontend != MVOD_FRONTEND_AUTO)
+		LOG(INFO, "front end: %s", name);
+	else if (opt)
+		LOG(INFO, "front end: %s (--frontend auto: --%s is an option of orb and sift only)",
+		    name, opt);
+	else
+		LOG(INFO, "front end: %s (--frontend auto)", name);
+	struct mvod_vo_params d;
+	mvod_vo_params_default(&d);
+	if (mvod_vo_frontend(p) == MVOD_FRONTEND_KLT && p->max_features != d.max_features)
+		LOG(WARN, "--features %d is the orb and sift front ends' feature count; klt runs, "
+			  "whose budget is --tracks (%d)", p->max_features, p->max_tracks);
+}
 
 int mvod_run_open_inputs(struct run *r)
 {
@@ -194,9 +221,8 @@ int mvod_run_open_inputs(struct run *r)
 		LOG(ERROR, "%s: %s", o->source, err);
 		return ret;
 	}
-	r->sum->frontend = mvod_vo_frontend(&o->vo);
-	LOG(INFO, "front end: %s%s", mvod_frontend_names[r->sum->frontend],
-	    o->vo.frontend == MVOD_FRONTEND_AUTO ? " (--frontend auto)" : "");
+	r->sum->frontend = mvod_vo_frontend_name(&o->vo);
+	log_frontend(&o->vo);
 	/*
 	 * A file or dataset is read as fast as it is processed, so waiting for bundle adjustment
 	 * costs no frame, and its result is then the same on every machine; on a live camera the

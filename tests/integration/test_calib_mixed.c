@@ -1,16 +1,21 @@
 /*
  * mvod calibrate on a folder that holds two cameras' photos (issue 18): mvod-synth renders
  * chessboard views through two different lenses (fx = fy = 576 and 640 px), named a_* and
- * b_* as two cameras' files would be. The verdict is "not one camera", in the JSON too, naming the parameter that differs;
- * one camera's photos alone are not. A folder with frames of two sizes gets the same verdict.
- * And calibration says nothing about a missing times.txt, which it does not use.
+ * b_* as two cameras' files would be. The verdict is "not one camera", naming the parameter
+ * that differs, and the file is not written (exit 1) unless --force asks for the blend, whose
+ * JSON records the verdict; one camera's photos alone are not, but their 12 views are too few
+ * (exit 1, as --help says; it exited 0). A folder with frames of two sizes gets the verdict
+ * "not one camera" too. And calibration says nothing about a missing times.txt, which it does
+ * not use.
  */
 #include <setjmp.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -56,18 +61,25 @@ static int setup(void **state)
 	return 0;
 }
 
-/* mvod calibrate on DIR; its stdout and stderr in r, the JSON's text in json. */
-static void calibrate(const char *dir, struct run_result *r, char *json, size_t len)
+/*
+ * mvod calibrate on DIR (--force when force), expected to exit with code; its stdout and
+ * stderr in r, the JSON's text in json, or "" when it wrote none.
+ */
+static void calibrate(const char *dir, bool force, int code, struct run_result *r, char *json,
+		      size_t len)
 {
 	char src[320], out[320];
 	snprintf(src, sizeof(src), "images:%s", dir);
 	snprintf(out, sizeof(out), "%s.json", dir);
+	unlink(out);
 	char *argv[] = {(char *)harness_bin("MVOD"), "calibrate", "--source", src, "--board", BOARD,
-			"--out", out, NULL};
+			"--out", out, force ? "--force" : NULL, NULL};
 	assert_int_equal(harness_run(argv, r), 0);
-	if (!r->exited || r->status != 0)
-		fail_msg("calibrate %s: %d %s%s", dir, r->status, r->out, r->err);
-	harness_read_file(out, json, len);
+	if (!r->exited || r->status != code)
+		fail_msg("calibrate %s: exit %d, not %d: %s%s", dir, r->status, code, r->out, r->err);
+	json[0] = '\0';
+	if (access(out, F_OK) == 0)
+		harness_read_file(out, json, len);
 	/* Calibration does not use frame times: no word about times.txt. */
 	assert_null(strstr(r->err, "times.txt"));
 }
@@ -77,7 +89,13 @@ static void test_two_cameras(void **state)
 	(void)state;
 	struct run_result r;
 	static char json[1 << 16];
-	calibrate(both, &r, json, sizeof(json));
+	/* A blend of two cameras is no file to run on: not written, exit 1, --force named. */
+	calibrate(both, false, 1, &r, json, sizeof(json));
+	assert_string_equal(json, "");
+	if (!strstr(r.err, "both.json not written: the views are not one camera") ||
+	    !strstr(r.err, "--force"))
+		fail_msg("the refusal does not say why or how: %s", r.err);
+	calibrate(both, true, 0, &r, json, sizeof(json));
 	if (!strstr(r.out, "verdict: not one camera. These frames cannot all come from one camera"))
 		fail_msg("no \"not one camera\" verdict: %s", r.out);
 	/*
@@ -95,9 +113,16 @@ static void test_one_camera(void **state)
 	(void)state;
 	struct run_result r;
 	static char json[1 << 16];
-	calibrate(only_a, &r, json, sizeof(json));
+	/* 12 views: the verdict "too few views" (under 15) is written, and exits 1. */
+	calibrate(only_a, false, 1, &r, json, sizeof(json));
 	assert_null(strstr(r.out, "not one camera"));
-	assert_non_null(strstr(r.out, "verdict: "));
+	assert_non_null(strstr(r.out, "verdict: too few views. Only 12 views were usable"));
+	assert_non_null(strstr(json, "\"verdict\":\t\"too few views\""));
+	if (!strstr(r.err, "only_a.json: too few views to trust it (exit status 1)"))
+		fail_msg("the exit status is not explained: %s", r.err);
+	/* --force accepts it: written, exit 0. */
+	calibrate(only_a, true, 0, &r, json, sizeof(json));
+	assert_non_null(strstr(json, "\"verdict\":\t\"too few views\""));
 }
 
 static void test_two_sizes(void **state)
@@ -110,7 +135,8 @@ static void test_two_sizes(void **state)
 	gather(dir, "cam_c", "c");
 	struct run_result r;
 	static char json[1 << 16];
-	calibrate(dir, &r, json, sizeof(json));
+	calibrate(dir, false, 1, &r, json, sizeof(json));
+	assert_string_equal(json, "");
 	if (!strstr(r.out, "not one camera") ||
 	    !strstr(r.out, "4 frames of another size than 640x480 were skipped"))
 		fail_msg("no verdict on the sizes: %s", r.out);

@@ -232,6 +232,21 @@ static void test_sweep_frontend_axis(void **state)
 	}
 }
 
+/*
+ * The front end a run logs is the one that runs: a SIFT run of mvod bench logged "front end:
+ * orb" (the descriptor front end's name, whatever its detector), and its table row says sift.
+ */
+static void test_sift_named(void **state)
+{
+	(void)state;
+	struct run_result r;
+	bench(&r, gt_tum, "--mode", "twoview", "--detector", "sift", "--max-frames", "6", NULL);
+	if (r.status != 0 || !strstr(r.err, "front end: sift (--frontend auto") ||
+	    strstr(r.err, "front end: orb"))
+		fail_msg("exit %d, expected \"front end: sift (--frontend auto\": %s", r.status, r.err);
+	assert_non_null(strstr(r.out, "| sift | bf |"));
+}
+
 static const char *write_file(const char *name, const char *text)
 {
 	const char *p = harness_tmp_path(name);
@@ -357,6 +372,7 @@ int main(void)
 		cmocka_unit_test(test_one_configuration),
 		cmocka_unit_test(test_sweep_two_configurations),
 		cmocka_unit_test(test_sweep_frontend_axis),
+		cmocka_unit_test(test_sift_named),
 		cmocka_unit_test(test_bad_ground_truth),
 		cmocka_unit_test(test_bad_usage),
 		cmocka_unit_test(test_table_reader_gone),

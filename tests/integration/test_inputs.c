@@ -225,7 +225,7 @@ static void test_speed_log_is_input(void **state)
 	snprintf(gt, sizeof(gt), "%s/gt.tum", png);
 	snprintf(log, sizeof(log), "%s/speed.lcmlog", harness_tmpdir());
 	snprintf(images, sizeof(images), "images:%s/images", png);
-	char *mk[] = {(char *)harness_bin("MVOD_MKSPEEDLOG"), gt, log, NULL};
+	char *mk[] = {(char *)harness_bin("MVOD"), "speed-log", gt, log, NULL};
 	struct run_result r;
 	assert_int_equal(harness_run(mk, &r), 0);
 	assert_int_equal(r.status, 0);

@@ -1,19 +1,24 @@
 /*
  * Metric scale with the real binary on mvod-synth, whose street's ground is exactly 1.6 m
  * below the camera and whose ground truth gives the exact speed: --scale height and
- * --scale external (speed through a file:// LCM log made by mkspeedlog), their fallbacks
+ * --scale external (speed through a file:// LCM log made by mvod speed-log), their fallbacks
  * (speed that stops arriving), and bad input (heights, logs of the wrong type or order).
  */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
 #include <cmocka.h>
+#include <lcm/eventlog.h>
 
 #include "harness.h"
+#include "mvod_pose_t.h"
+#include "mvod_speed_t.h"
 
 #define FRAMES 60
 static char dir[256], video[300], calib[300], gt[300];
@@ -30,11 +35,11 @@ static int setup(void **state)
 	return 0;
 }
 
-/* mkspeedlog's log of the ground truth's speed at out; extra arguments NULL-terminated. */
+/* mvod speed-log's log of the ground truth's speed at out; extra arguments NULL-terminated. */
 static void speed_log(const char *out, ...)
 {
-	char *argv[16] = {(char *)harness_bin("MVOD_MKSPEEDLOG"), gt, (char *)out};
-	int n = 3;
+	char *argv[16] = {(char *)harness_bin("MVOD"), "speed-log", gt, (char *)out};
+	int n = 4;
 	va_list ap;
 	va_start(ap, out);
 	for (char *a; n < 15 && (a = va_arg(ap, char *));)
@@ -43,7 +48,38 @@ static void speed_log(const char *out, ...)
 	struct run_result r;
 	assert_int_equal(harness_run(argv, &r), 0);
 	if (!r.exited || r.status != 0)
-		fail_msg("mkspeedlog failed (%d): %s", r.status, r.err);
+		fail_msg("mvod speed-log failed (%d): %s", r.status, r.err);
+}
+
+/*
+ * Logs no robot should send, made from a good one at in: out holds mvod.pose_t instead of
+ * mvod.speed_t (wrong_type), or the 10th message's time goes back before the 9th's.
+ */
+static void spoil_log(const char *in, const char *out, bool wrong_type)
+{
+	lcm_eventlog_t *r = lcm_eventlog_create(in, "r"), *w = lcm_eventlog_create(out, "w");
+	assert_true(r && w);
+	int64_t utimes[16];
+	lcm_eventlog_event_t *ev;
+	for (int i = 0; (ev = lcm_eventlog_read_next_event(r)); i++) {
+		mvod_speed_t m;
+		uint8_t buf[256];
+		assert_true(mvod_speed_t_decode(ev->data, 0, ev->datalen, &m) > 0);
+		utimes[i % 16] = m.utime;
+		if (!wrong_type && i == 9)
+			m.utime = utimes[7];
+		mvod_pose_t p = {.utime = m.utime, .orientation = {1, 0, 0, 0}};
+		int len = wrong_type ? mvod_pose_t_encode(buf, 0, sizeof(buf), &p)
+				     : mvod_speed_t_encode(buf, 0, sizeof(buf), &m);
+		assert_true(len > 0);
+		lcm_eventlog_event_t out_ev = *ev;
+		out_ev.data = buf;
+		out_ev.datalen = len;
+		assert_int_equal(lcm_eventlog_write_event(w, &out_ev), 0);
+		lcm_eventlog_free_event(ev);
+	}
+	lcm_eventlog_destroy(r);
+	lcm_eventlog_destroy(w);
 }
 
 /*
@@ -244,7 +280,7 @@ static void test_height_map_fast(void **state)
 	strcpy(video, street[0]), strcpy(calib, street[1]), strcpy(gt, street[2]);
 }
 
-/* mkspeedlog's exact speed of the street at speed.lcmlog; its file:// URL into url. */
+/* mvod speed-log's exact speed of the street at speed.lcmlog; its file:// URL into url. */
 static void exact_speed(char *url, size_t len)
 {
 	char log[300];
@@ -468,24 +504,24 @@ static void test_bad_speed_sources(void **state)
 static void test_bad_speed_messages(void **state)
 {
 	(void)state;
-	static const struct {
-		const char *flag, *channel, *needle;
-	} cases[] = {
-		{"--wrong-type", NULL, "are not mvod.speed_t"},
-		{"--decreasing", NULL, "not after the one before"},
-		{"--no-distance", "ELSEWHERE", "no mvod.speed_t on MVOD_SPEED"},
-	};
-	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+	static const char *const needles[] = {"are not mvod.speed_t", "not after the one before",
+					      "no mvod.speed_t on MVOD_SPEED"};
+	char good[300];
+	snprintf(good, sizeof(good), "%s/good.lcmlog", dir);
+	speed_log(good, NULL);
+	for (size_t i = 0; i < 3; i++) {
 		char log[300], url[320];
 		snprintf(log, sizeof(log), "%s/bad%zu.lcmlog", dir, i);
 		snprintf(url, sizeof(url), "file://%s?mode=r", log);
-		speed_log(log, cases[i].flag, cases[i].channel ? "--channel" : NULL,
-			  cases[i].channel, NULL);
+		if (i < 2)
+			spoil_log(good, log, i == 0);
+		else
+			speed_log(log, "--no-distance", "--channel", "ELSEWHERE", NULL);
 		struct run_result r;
 		run_mvod(&r, "badmsg", "--scale", "external", "--speed-url", url, "--max-frames",
 			 "15");
-		if (!r.exited || r.status != 0 || !strstr(r.err, cases[i].needle))
-			fail_msg("%s: exit %d, %s", cases[i].needle, r.status, r.err);
+		if (!r.exited || r.status != 0 || !strstr(r.err, needles[i]))
+			fail_msg("%s: exit %d, %s", needles[i], r.status, r.err);
 		count_source_in("badmsg", 15, 0); /* every pose finite */
 	}
 }

@@ -122,17 +122,87 @@ static void test_option_clashes(void **state)
 	(void)state;
 	expect(calib, 2, "--tracks is an option of the KLT front end, which --frontend orb does not "
 	       "run", "--frontend", "orb", "--tracks", "300", NULL);
-	expect(calib, 2, "--tracks is an option of the KLT front end and --features one of the "
-	       "descriptor front end", "--tracks", "300", "--features", "3000", NULL);
+	expect(calib, 2, "--tracks is an option of the KLT front end and --ratio one of the "
+	       "descriptor front end", "--tracks", "300", "--ratio", "0.7", NULL);
 	expect(calib, 2, "--mode map keeps ORB descriptors in its map, not sift", "--mode", "map",
 	       "--detector", "sift", NULL);
 	/* Map mode is the default: SIFT asks for two-view by name. */
 	expect(calib, 2, "use --detector orb or --mode twoview", "--detector", "sift", NULL);
-	expect(calib, 0, "mvod: 4 frames", "--mode", "twoview", "--detector", "sift", NULL);
+	/* The summary names the front end that ran by its detector (it said "orb"). */
+	expect(calib, 0, ", front end sift\n", "--mode", "twoview", "--detector", "sift", NULL);
 	expect(calib, 2, "--matcher is an option of the descriptor front end", "--frontend", "klt",
 	       "--matcher", "flann", NULL);
 	expect(calib, 0, "mvod: 4 frames", "--tracks", "300", NULL);
 	expect(calib, 0, "mvod: 4 frames", "--frontend", "orb", "--features", "3000", NULL);
+}
+
+/*
+ * --features is the orb and sift front ends' feature count and picks no front end: `--features
+ * 500` (or `[vo] features = 1500` in a file) switched --frontend auto to orb, 8x slower, with
+ * only an info line. klt runs, one warning names --tracks, and --print-config says why klt;
+ * --tracks with --features is no clash. (--features 2000, the default, would not warn: the
+ * options are read by value, as a --print-config file gives every key.)
+ */
+static void test_features_keep_klt(void **state)
+{
+	(void)state;
+	static const char warning[] = "mvod: warn: --features 500 is the orb and sift front "
+				      "ends' feature count; klt runs, whose budget is --tracks (500)\n";
+	char *argv[] = {(char *)harness_bin("MVOD"), "--no-lcm", "--source", video, "--calib", calib,
+			"--features", "500", NULL};
+	struct run_result r;
+	assert_int_equal(harness_run(argv, &r), 0);
+	if (!r.exited || r.status != 0 || !strstr(r.err, "front end: klt (--frontend auto)\n") ||
+	    !strstr(r.out, ", front end klt\n"))
+		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
+	const char *w = strstr(r.err, warning);
+	if (!w || strstr(w + sizeof(warning) - 1, "--features"))
+		fail_msg("not one warning \"%s\": %s", warning, r.err);
+	expect(calib, 0, ", front end klt\n", "--tracks", "300", "--features", "3000", NULL);
+	char conf[300];
+	snprintf(conf, sizeof(conf), "%s/features.conf", harness_tmpdir());
+	harness_write_file(conf, "[vo]\nfeatures = 1500\n");
+	char *print[] = {(char *)harness_bin("MVOD"), "--config", conf, "--print-config", NULL};
+	assert_int_equal(harness_run(print, &r), 0);
+	if (!r.exited || r.status != 0 ||
+	    !strstr(r.out, "\nfrontend = auto  ; runs klt: none of detector, matcher, ratio, best "
+			   "(orb and sift only) set\n") || !strstr(r.out, "\nfeatures = 1500\n"))
+		fail_msg("exit %d: %s%s", r.status, r.out, r.err);
+}
+
+/*
+ * mvod run warns once at start when --calib records a verdict of mvod calibrate's other than
+ * good: a "not one camera" file (mvod calibrate --force, or an mvod that wrote every verdict)
+ * ran without a word. The run goes on (exit 0); a good verdict, or none, says nothing.
+ */
+static void test_calibration_verdict(void **state)
+{
+	(void)state;
+	static const char *const verdicts[] = {"not one camera", "too few views", "good"};
+	char text[8192];
+	harness_read_file(calib, text, sizeof(text));
+	assert_null(strstr(text, "verdict")); /* mvod-synth's file records none */
+	for (int i = 0; i < 3; i++) {
+		char path[300], edited[8400], want[600];
+		snprintf(path, sizeof(path), "%s/verdict%d.json", harness_tmpdir(), i);
+		snprintf(edited, sizeof(edited), "{\"verdict\": \"%s\", %s", verdicts[i],
+			 strchr(text, '{') + 1);
+		harness_write_file(path, edited);
+		snprintf(want, sizeof(want), "mvod: warn: calibration %s was judged \"%s\" by mvod "
+			 "calibrate: the poses may be off; calibrate again (mvod calibrate --help)\n",
+			 path, verdicts[i]);
+		char *argv[] = {(char *)harness_bin("MVOD"), "--no-lcm", "--source", video,
+				"--calib", path, NULL};
+		struct run_result r;
+		assert_int_equal(harness_run(argv, &r), 0);
+		if (!r.exited || r.status != 0)
+			fail_msg("exit %d: %s", r.status, r.err);
+		const char *w = strstr(r.err, want);
+		if (i < 2 && (!w || strstr(w + strlen(want), "was judged")))
+			fail_msg("not one \"%s\" in: %s", want, r.err);
+		if (i == 2 && strstr(r.err, "judged"))
+			fail_msg("a good calibration warned: %s", r.err);
+	}
 }
 
 /* A calibration file saved by a Windows editor starts with a byte order mark: it is read. */
@@ -230,6 +300,8 @@ int main(void)
 		cmocka_unit_test(test_channel_too_long),
 		cmocka_unit_test(test_image_too_small),
 		cmocka_unit_test(test_option_clashes),
+		cmocka_unit_test(test_features_keep_klt),
+		cmocka_unit_test(test_calibration_verdict),
 		cmocka_unit_test(test_bom),
 		cmocka_unit_test(test_empty_calibration),
 		cmocka_unit_test(test_out_of_memory),

@@ -173,9 +173,12 @@ def targets_for(tests):
     if missing:
         return None, missing
     out = set()
+    build = os.path.abspath(BUILD) + os.sep
     for t in info:
         if t["name"] in tests:
-            out.add(os.path.relpath(t["cmd"][0], BUILD))
+            # A script test's program (tests/scripts/*.sh, python3) is no build output.
+            if os.path.abspath(t["cmd"][0]).startswith(build):
+                out.add(os.path.relpath(t["cmd"][0], BUILD))
             for d in t.get("depends", []):
                 for fn in by_id.get(d, {}).get("filename", []):
                     out.add(os.path.relpath(fn, BUILD))

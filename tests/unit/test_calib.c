@@ -85,6 +85,9 @@ static void test_malformed_json(void **state)
 		 "distortion"},
 		{"{\"format\": \"mvod-calibration/1\", \"model\": \"pinhole-radtan\", \"image_size\": "
 		 "[640, 480], \"K\": [[500,0,320],[0,500,240],[0,0,1]]}", "distortion"},
+		{"{\"format\": \"mvod-calibration/1\", \"model\": \"pinhole-radtan\", \"image_size\": "
+		 "[640, 480], \"K\": [[500,0,320],[0,500,240],[0,0,1]], \"distortion\": [], "
+		 "\"verdict\": 3}", "verdict"},
 	};
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		struct mvod_camera c;
@@ -160,6 +163,21 @@ static void test_save_round_trip(void **state)
 	assert_memory_equal(c.dist, r.dist, 4 * sizeof(double));
 	assert_int_equal(r.model, MVOD_CAM_FISHEYE_KB4);
 	assert_int_equal(r.width, 1226);
+	assert_string_equal(r.verdict, ""); /* none recorded */
+	/*
+	 * mvod calibrate's verdict reads back (mvod run warns on it), and a file saved from a
+	 * camera read with one, by calib-convert, keeps it; the meta's own verdict comes first.
+	 */
+	snprintf(meta.verdict, sizeof(meta.verdict), "not one camera");
+	char judged[300], converted[300];
+	snprintf(judged, sizeof(judged), "%s/judged.json", dir);
+	snprintf(converted, sizeof(converted), "%s/converted.json", dir);
+	assert_int_equal(mvod_calib_save(judged, &c, &meta), 0);
+	assert_int_equal(mvod_calib_load(judged, &r, err, sizeof(err)), 0);
+	assert_string_equal(r.verdict, "not one camera");
+	assert_int_equal(mvod_calib_save(converted, &r, &(struct mvod_calib_meta){.rms_px = -1}), 0);
+	assert_int_equal(mvod_calib_load(converted, &r, err, sizeof(err)), 0);
+	assert_string_equal(r.verdict, "not one camera");
 	/* A failed save (unwritable directory) leaves nothing behind. */
 	assert_true(mvod_calib_save("/nonexistent-dir/x.json", &c, NULL) < 0);
 }

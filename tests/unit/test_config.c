@@ -347,6 +347,43 @@ static void test_print_leaves_format_derived(void **state)
 	mvod_config_fini(&b);
 }
 
+/*
+ * --print-config says which front end auto runs and why, as an INI comment that keeps the key
+ * auto when the printout is read back: klt unless an option only orb and sift have differs
+ * from its default. --features is not one of them (`[vo] features = 1500` switched auto to
+ * orb, 8x slower); an explicit front end needs no comment.
+ */
+static void test_print_frontend(void **state)
+{
+	(void)state;
+	static const struct {
+		const char *file, *line;
+	} cases[] = {
+		{"", "\nfrontend = auto  ; runs klt: none of detector, matcher, ratio, best (orb and "
+		     "sift only) set\n"},
+		{"[vo]\nfeatures = 1500\n", "\nfrontend = auto  ; runs klt: none of detector, matcher, "
+		 "ratio, best (orb and sift only) set\n"},
+		{"[vo]\nmatcher = flann\n", "\nfrontend = auto  ; runs orb: matcher = flann (orb and sift "
+		 "only) set\n"},
+		{"[vo]\nmode = twoview\ndetector = sift\nfeatures = 500\n", "\nfrontend = auto  ; runs "
+		 "sift: detector = sift (orb and sift only) set\n"},
+		{"[vo]\nfrontend = klt\nfeatures = 500\n", "\nfrontend = klt\n"},
+		{"[vo]\nfrontend = orb\n", "\nfrontend = orb\n"},
+	};
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		struct mvod_config a, b;
+		parse_ok(cases[i].file, &a);
+		char *text = print(&a);
+		if (!strstr(text, cases[i].line))
+			fail_msg("case %zu: no \"%s\" in:\n%s", i, cases[i].line, text);
+		parse_ok(text, &b); /* the comment is a comment: the key reads back as it was */
+		assert_int_equal(b.run.vo.frontend, a.run.vo.frontend);
+		free(text);
+		mvod_config_fini(&a);
+		mvod_config_fini(&b);
+	}
+}
+
 /* A value INI cannot carry is refused rather than printed into something else. */
 static void test_print_refuses(void **state)
 {
@@ -440,6 +477,14 @@ static void test_option_clashes(void **state)
 	p.frontend = MVOD_FRONTEND_KLT;
 	p.matcher = MVOD_MATCHER_FLANN;
 	refused(&p, (const char *const[]){"--matcher", "--frontend klt", NULL});
+	/* --features is orb's and sift's count: with klt the run warns, it is no clash. */
+	p = d;
+	p.frontend = MVOD_FRONTEND_KLT;
+	p.max_features = 500;
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
+	p.max_tracks = 300;
+	p.frontend = MVOD_FRONTEND_AUTO;
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 }
 
 int main(void)
@@ -454,6 +499,7 @@ int main(void)
 		cmocka_unit_test(test_print_round_trip),
 		cmocka_unit_test(test_print_refuses),
 		cmocka_unit_test(test_print_leaves_format_derived),
+		cmocka_unit_test(test_print_frontend),
 		cmocka_unit_test(test_example_config),
 		cmocka_unit_test(test_option_clashes),
 	};

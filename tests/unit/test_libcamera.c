@@ -7,12 +7,14 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include <cmocka.h>
 
 #include "capture/libcamera_shim.h"
+#include "capture/v4l2.h"
 #include "mvod/capture.h"
 
 static void test_index_and_params(void **state)
@@ -87,6 +89,45 @@ static void test_formats(void **state)
 			 -ENOENT);
 }
 
+/* V4L2 through its syscall seam (capture/v4l2.h) with no node: no /dev/video* at all. */
+static int no_node(const char *path, int flags)
+{
+	(void)path, (void)flags;
+	errno = ENOENT;
+	return -1;
+}
+
+/*
+ * mvod --list-cameras with no V4L2 camera: a build without libcamera says the backend is not
+ * built and how to get it; it said "and no libcamera camera", as if libcamera had looked.
+ */
+static void test_list_none(void **state)
+{
+	(void)state;
+	static const struct mvod_v4l2_io none = {.open = no_node};
+	const struct mvod_v4l2_io *kernel = mvod_v4l2_io;
+	mvod_v4l2_io = &none;
+	char *text = NULL;
+	size_t len = 0;
+	FILE *out = open_memstream(&text, &len);
+	int n = mvod_capture_list_cameras(out);
+	fclose(out);
+	mvod_v4l2_io = kernel;
+#if MVOD_HAVE_LIBCAMERA
+	if (n > 0) /* a libcamera camera is attached */
+		skip();
+	assert_string_equal(text, "No cameras found: no V4L2 capture device in /dev/video*, and no "
+				  "libcamera camera.\n");
+#else
+	assert_int_equal(n, 0);
+	assert_string_equal(text, "No cameras found: no V4L2 capture device in /dev/video*; "
+				  "libcamera cameras cannot be listed: this mvod was built without "
+				  "libcamera: install libcamera-dev and rebuild (meson setup "
+				  "-Dlibcamera=enabled)\n");
+#endif
+	free(text);
+}
+
 /* This machine has no camera: either libcamera finds none, or mvod was built without it. */
 static void test_no_camera(void **state)
 {
@@ -112,6 +153,7 @@ int main(void)
 		cmocka_unit_test(test_bad_uris),
 		cmocka_unit_test(test_formats),
 		cmocka_unit_test(test_no_camera),
+		cmocka_unit_test(test_list_none),
 	};
 	return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -685,6 +685,18 @@ static void test_list(void **state)
 		if (!strstr(text, want[i]))
 			fail_msg("missing \"%s\" in:\n%s", want[i], text);
 	free(text);
+#if !MVOD_HAVE_LIBCAMERA
+	/* The whole list (mvod --list-cameras) ends by saying libcamera's cameras are not in it. */
+	out = open_memstream(&text, &len);
+	assert_int_equal(mvod_capture_list_cameras(out), 1);
+	fclose(out);
+	const char *note = "\nlibcamera cameras cannot be listed: this mvod was built without "
+			   "libcamera: install libcamera-dev and rebuild (meson setup "
+			   "-Dlibcamera=enabled)\n";
+	if (len < strlen(note) || strcmp(text + len - strlen(note), note) != 0)
+		fail_msg("no \"%s\" at the end of:\n%s", note, text);
+	free(text);
+#endif
 }
 
 /* The mvod.status_t states a run published, in order. */

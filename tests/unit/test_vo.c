@@ -489,10 +489,13 @@ static void test_seam_refuses_bad_features(void **state)
 }
 
 /*
- * --frontend auto: klt in either mode with the descriptor options at their defaults; orb as
- * soon as any one of the five descriptor options differs; an explicit choice
- * stays. --frontend klt with a descriptor option is refused naming both, as are --tracks
- * where orb runs and map mode with SIFT.
+ * --frontend auto: klt in either mode with the descriptor options at their defaults; orb (or
+ * sift, by its name) as soon as any one of the four options only the descriptor front end has
+ * (detector, matcher, ratio, best) differs; an explicit choice stays. --features, ORB's and
+ * SIFT's feature count, never picks a front end: `[vo] features = 1500` switched auto to orb
+ * (8x slower) with only an info line. --frontend klt with a descriptor option is refused
+ * naming both, as are --tracks where orb runs and map mode with SIFT; --features with klt is
+ * not (the run warns instead).
  */
 static void test_frontend_auto(void **state)
 {
@@ -507,40 +510,57 @@ static void test_frontend_auto(void **state)
 	p.mode = MVOD_VO_TWOVIEW;
 	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
 	d.mode = MVOD_VO_TWOVIEW; /* SIFT below: the map keeps ORB descriptors (the end) */
+	static const char *const names[] = {"sift", "orb", "orb", "orb"};
 	for (int i = 0; mvod_vo_descriptor_flags[i]; i++) {
 		p = d;
 		switch (i) {
 		case 0: p.detector = MVOD_DETECTOR_SIFT; break;
 		case 1: p.matcher = MVOD_MATCHER_FLANN; break;
-		case 2: p.max_features = 3000; break;
-		case 3: p.ratio = 0.7; break;
+		case 2: p.ratio = 0.7; break;
 		default: p.best_n = 100; break;
 		}
 		assert_string_equal(mvod_vo_descriptor_option(&p), mvod_vo_descriptor_flags[i]);
 		assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
+		assert_string_equal(mvod_vo_frontend_name(&p), names[i]);
 		char err[256] = "";
 		assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 		p.frontend = MVOD_FRONTEND_KLT;
 		assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
+		assert_string_equal(mvod_vo_frontend_name(&p), "klt");
 		assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
 		char flag[32];
 		snprintf(flag, sizeof(flag), "--%s", mvod_vo_descriptor_flags[i]);
 		assert_non_null(strstr(err, flag));
 		assert_non_null(strstr(err, "--frontend klt"));
 	}
+	assert_null(mvod_vo_descriptor_flags[4]); /* the four, no more: not --features */
+	char err[256] = "";
+	p = d;
+	p.max_features = 500; /* ORB's and SIFT's count: klt still runs, and is not refused */
+	assert_null(mvod_vo_descriptor_option(&p));
+	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_KLT);
+	assert_string_equal(mvod_vo_frontend_name(&p), "klt");
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
+	p.frontend = MVOD_FRONTEND_KLT;
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
+	p.frontend = MVOD_FRONTEND_ORB; /* and where orb runs, it is its count */
+	assert_string_equal(mvod_vo_frontend_name(&p), "orb");
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 	p = d;
 	p.frontend = MVOD_FRONTEND_ORB;
 	assert_int_equal(mvod_vo_frontend(&p), MVOD_FRONTEND_ORB);
-	char err[256] = "";
 	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
 	p.max_tracks = 300; /* the KLT front end's cap, where orb runs: refused */
 	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
 	assert_non_null(strstr(err, "--tracks"));
 	p.frontend = MVOD_FRONTEND_AUTO; /* auto picks klt then */
 	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
-	p.max_features = 3000; /* and now orb: the two options pick different front ends */
+	p.max_features = 3000; /* still klt: --features picks no front end */
+	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), 0);
+	p.ratio = 0.7; /* now orb: the two options pick different front ends */
 	assert_int_equal(mvod_config_check_frontend(&p, err, sizeof(err)), -EINVAL);
-	assert_non_null(strstr(err, "--features"));
+	assert_non_null(strstr(err, "--tracks"));
+	assert_non_null(strstr(err, "--ratio"));
 	p = d;
 	p.mode = MVOD_VO_MAP;
 	p.detector = MVOD_DETECTOR_SIFT; /* the map keeps ORB descriptors */
@@ -562,6 +582,26 @@ static void test_run_mode(void **state)
 	assert_int_equal(mvod_vo_create(&p, &cam, &vo), 0);
 	assert_false(mvod_vo_seam_has_map(vo));
 	mvod_vo_destroy(vo);
+}
+
+/*
+ * The front end's one name (mvod_vo_frontend_name), which the run's log, its summary and mvod
+ * bench print: klt, or the descriptor front end by its detector; a SIFT run said "orb".
+ */
+static void test_frontend_name(void **state)
+{
+	(void)state;
+	struct mvod_vo_params p;
+	mvod_vo_params_default(&p);
+	assert_string_equal(mvod_vo_frontend_name(&p), "klt");
+	p.frontend = MVOD_FRONTEND_ORB;
+	assert_string_equal(mvod_vo_frontend_name(&p), "orb");
+	p.detector = MVOD_DETECTOR_SIFT;
+	assert_string_equal(mvod_vo_frontend_name(&p), "sift");
+	p.frontend = MVOD_FRONTEND_AUTO; /* --detector sift asks for descriptors */
+	assert_string_equal(mvod_vo_frontend_name(&p), "sift");
+	p.frontend = MVOD_FRONTEND_KLT;
+	assert_string_equal(mvod_vo_frontend_name(&p), "klt");
 }
 
 /*
@@ -1095,6 +1135,7 @@ int main(void)
 	const struct CMUnitTest tests[] = {
 		cmocka_unit_test(test_frontend_auto),
 		cmocka_unit_test(test_run_mode),
+		cmocka_unit_test(test_frontend_name),
 		cmocka_unit_test(test_quality),
 		cmocka_unit_test(test_first_frame),
 		cmocka_unit_test(test_few_features_make_no_reference),

@@ -76,16 +76,14 @@ void mvod_vo_params_default(struct mvod_vo_params *p)
 	};
 }
 
-const char *const mvod_vo_descriptor_flags[] = {"detector", "matcher", "features", "ratio",
-						 "best", NULL};
+const char *const mvod_vo_descriptor_flags[] = {"detector", "matcher", "ratio", "best", NULL};
 
 const char *mvod_vo_descriptor_option(const struct mvod_vo_params *p)
 {
 	struct mvod_vo_params d;
 	mvod_vo_params_default(&d);
 	/* In the order of mvod_vo_descriptor_flags. */
-	bool differs[] = {p->detector != d.detector, p->matcher != d.matcher,
-			  p->max_features != d.max_features, p->ratio != d.ratio,
+	bool differs[] = {p->detector != d.detector, p->matcher != d.matcher, p->ratio != d.ratio,
 			  p->best_n != d.best_n};
 	for (int i = 0; mvod_vo_descriptor_flags[i]; i++)
 		if (differs[i])
@@ -96,7 +94,9 @@ const char *mvod_vo_descriptor_option(const struct mvod_vo_params *p)
 /*
  * The one place auto is decided: klt in both modes (map mode on KLT tracks beat it on ORB
  * descriptors in every figure on KITTI 06/07: free-scale drift 1.007/1.035 against
- * 1.066/1.384; BENCHMARKS.md), orb when the user tunes the descriptor front end.
+ * 1.066/1.384; BENCHMARKS.md), orb when the user sets an option only the descriptor front end
+ * has. Not --features, which both descriptor detectors read: `[vo] features = 1500` made auto
+ * run orb, 8x slower (38 against 316-322 fps), where the user meant fewer or more of anything.
  */
 enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p)
 {
@@ -105,6 +105,13 @@ enum mvod_frontend mvod_vo_frontend(const struct mvod_vo_params *p)
 	if (mvod_vo_descriptor_option(p))
 		return MVOD_FRONTEND_ORB;
 	return MVOD_FRONTEND_KLT;
+}
+
+const char *mvod_vo_frontend_name(const struct mvod_vo_params *p)
+{
+	if (mvod_vo_frontend(p) == MVOD_FRONTEND_KLT)
+		return mvod_frontend_names[MVOD_FRONTEND_KLT];
+	return mvod_detector_name(p->detector);
 }
 
 bool mvod_vo_tracked(const struct mvod_vo_result *res)
