@@ -101,19 +101,13 @@ bench_row() {
 
 # scale_args NAME SCALE: sets sargs to the mvod arguments of SCALE: gt, auto, height
 # (--camera-height $cam_height), external (the exact speed of the ground truth $gt, times from
-# $times when it is KITTI's, written by mkspeedlog into $out/NAME.speed.lcmlog), external-noise
-# (that speed times 1 + 5 % N(0, 1), seed 1) or external-bias (2 % too fast). An external
-# scale needs mkspeedlog (a test tool: meson's tests option): exits 77 without it.
+# $times when it is KITTI's, written by `mvod speed-log` into $out/NAME.speed.lcmlog),
+# external-noise (that speed times 1 + 5 % N(0, 1), seed 1) or external-bias (2 % too fast).
 scale_args() {
 	local log=$out/$1.speed.lcmlog mk=()
 	case $2 in
 	external*)
-		local bin
-		for bin in "$build/tools/mkspeedlog" "$build/tests/mkspeedlog" "$(command -v mkspeedlog)"; do
-			[ -x "$bin" ] && break
-		done
-		need "${bin:-mkspeedlog}"
-		mk=("$bin" "$gt" "$log" ${times:+--times "$times"})
+		mk=("$mvod" speed-log "$gt" "$log" ${times:+--times "$times"})
 		case $2 in
 		external-noise) mk+=(--noise 0.05 --seed 1) ;;
 		external-bias) mk+=(--bias 0.02) ;;
