@@ -206,7 +206,7 @@ static void test_synth_raw(void **state)
  * frames the PNG rendering has. OpenCV's VideoWriter, which wrote it before, rounded each side
  * down to even, so 321x241 came out 320x240 beside a calibration for 321x241 (KITTI's own
  * 1241x376 came out 1240x376) and mvod refused the pair. Then mvod bench runs on the pair, as
- * the README has it.
+ * docs/synth.md has it.
  */
 static void test_synth_odd_size(void **state)
 {
@@ -273,9 +273,9 @@ static void test_synth_odd_size(void **state)
 }
 
 /*
- * The same arguments and seed give the same video.mkv, byte for byte, for both codecs (the
- * README says so of mvod-synth's output): before, Matroska's random segment and track UIDs
- * made 44 bytes of every file differ between two runs.
+ * The same arguments and seed give the same video.mkv, byte for byte, for both codecs
+ * (docs/synth.md says so of mvod-synth's output): before, Matroska's random segment and track
+ * UIDs made 44 bytes of every file differ between two runs.
  */
 static void test_synth_same_bytes(void **state)
 {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Mutation testing for mvod: `make mutate` (README, "Mutation testing").
+"""Mutation testing for mvod: `make mutate` (docs/tests.md, "Mutation testing").
 
 Each mutation in mutations.txt is one small edit of one source file that a correct test suite
 must notice. The harness copies the tracked files of this worktree (with their uncommitted

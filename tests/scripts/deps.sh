@@ -2,8 +2,8 @@
 # What the Makefile would install, read from `make -n` (nothing runs): `make demo` (through
 # make deps) installs no test tool, no libcamera-dev and no Ceres (map mode's bundle adjustment
 # is mvod's own; Ceres is the tests' reference); `make test` installs the test
-# toolchain; LIBCAMERA=1 adds libcamera-dev; and the README's dependency table names every
-# package either installs (issue 18). MVOD_SRCDIR is the source tree (set by meson test).
+# toolchain; LIBCAMERA=1 adds libcamera-dev; and the dependency table of docs/building.md names
+# every package either installs (issue 18). MVOD_SRCDIR is the source tree (set by meson test).
 set -eu
 src=${MVOD_SRCDIR:?run through meson test}
 fail=0
@@ -33,8 +33,8 @@ for p in libopencv-contrib-dev zlib1g-dev liblcm-bin; do
 	echo "$demo" | grep -qx "$p" || { echo "make demo would not install $p"; fail=1; }
 done
 for p in $testing libcamera-dev; do
-	grep -q "^| .*\`$p\`" "$src/README.md" ||
-		{ echo "README.md's dependency table does not name $p"; fail=1; }
+	grep -q "^| .*\`$p\`" "$src/docs/building.md" ||
+		{ echo "docs/building.md's dependency table does not name $p"; fail=1; }
 done
 [ $fail = 0 ] && echo "deps: demo installs $(echo $demo | wc -w) packages, test $(echo $testing | wc -w)"
 exit $fail
