@@ -88,7 +88,8 @@ FENCE = re.compile(r'^(\s*)(```+)\s*([^\s`]*)\s*$')
 BLOCK_TIMEOUT = 300
 QUIET_FLAGS = ('--help', '-h', '--help-all', '--print-config', '--version', '--list-cameras')
 LCM_TOOLS = ('lcm-logger', 'lcm-logplayer', 'lcm-spy')
-MVOD_COMMANDS = ('run', 'calibrate', 'mount', 'board', 'calib-convert', 'bench', 'view')
+MVOD_COMMANDS = ('run', 'calibrate', 'mount', 'board', 'calib-convert', 'bench', 'view',
+                 'speed-log')
 NUMBER = r'\d+(?:\.\d+)?'
 TIMING = re.compile(NUMBER + r'(?= ?(?:ms|s|fps)\b)|(?<=fps=)' + NUMBER +
                     r'|(?<=_ms=)' + NUMBER + r'|(?<=_s=)' + NUMBER + r'|(?<=_kb=)' + NUMBER)

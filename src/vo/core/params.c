@@ -50,8 +50,8 @@ bool mvod_matcher_uses_ratio(enum mvod_matcher_kind k)
 /*
  * Map mode is the default (issue 12): on KLT tracks it beats two-view on the KITTI clips with
  * --scale gt, free scale and the camera's height, and on mvod-synth's KITTI 00 drive with the
- * camera's height (t_rel 2.05-2.76 % against 9.01 %; BENCHMARKS.md, the eighth merge). Where it cannot run (no Ceres, --scale
- * external) two-view does: mvod_vo_map_missing.
+ * camera's height (BENCHMARKS.md, "KITTI clips" and "Long drives"). It runs with every
+ * --scale and needs no Ceres.
  */
 void mvod_vo_params_default(struct mvod_vo_params *p)
 {
