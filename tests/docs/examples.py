@@ -36,7 +36,7 @@ Makefile's demo recipe (make -n demo) past its build step: the test builds and i
 A block that names ../shared/data is skipped, and listed, when that folder is absent.
 
 LCM. No runnable block may publish or listen beyond its own process: a block is refused when
-it names a udpm:// URL, when it runs `mvod` (run, or no command) or `mvod view` without an
+it names a URL (SCHEME://) other than memq:// or file://, when it runs `mvod` (run, or no command) or `mvod view` without an
 explicit `--lcm-url memq://...` or `--lcm-url file://...` (`--help`, `--print-config`,
 `--version` and `--list-cameras` publish nothing), when any `--lcm-url` is another URL, or
 when it runs lcm-logger, lcm-logplayer or lcm-spy. Nor may it name /tmp: a block writes into
@@ -209,8 +209,8 @@ def lcm_problems(block):
     """Why a runnable block could publish or listen beyond its process, if it could."""
     script = block_script(block)
     problems = []
-    if 'udpm://' in script:
-        problems.append('names a udpm:// URL: LCM multicast')
+    for scheme in sorted(set(re.findall(r'\b([a-z][a-z0-9+.-]*)://', script)) - {'memq', 'file'}):
+        problems.append('names a %s:// URL: only memq:// or file:// here' % scheme)
     if re.search(r'(^|[\s\'"=:(])/tmp/', script):
         problems.append('names /tmp: write into the page\'s folder by a relative path')
     for words in simple_commands(script):

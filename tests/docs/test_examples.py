@@ -71,7 +71,7 @@ class Lcm(unittest.TestCase):
                 ('ls && mvod --source file:v.mkv --trajectory t.tum', 'without --lcm-url'),
                 ('build/mvod run --config x.conf', 'without --lcm-url'),
                 ('mvod view --png a.png', 'without --lcm-url'),
-                ("mvod --source x --lcm-url 'udpm://239.255.76.67:7667?ttl=0'", 'udpm'),
+                ("build/examples/mvod-subscribe 'tcpq://127.0.0.1:7700'", 'names a tcpq:// URL'),
                 ('mvod --source x --lcm-url tcpq://host', 'only memq:// or file://'),
                 ('lcm-logger log.lcmlog', 'lcm-logger'),
                 ('mvod --source x --lcm-url memq:// --trajectory /tmp/t.tum', '/tmp')]:
